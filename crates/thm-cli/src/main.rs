@@ -1,0 +1,23 @@
+//! The `thm` command-line tool.
+
+// The subcommands arrive with the crates that implement them; until then the enum is empty.
+#![allow(unreachable_code, unused_variables)]
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Coupled thermo-hydro-mechanical simulation of granular and porous materials.
+#[derive(Debug, Parser)]
+#[command(name = "thm", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {}
+}
