@@ -1,0 +1,632 @@
+//! The mesh data types shared with the flow and heat solvers: [`PoreMesh`] and its parts.
+//!
+//! A `PoreMesh` is a planar triangulation of the specimen's mid-plane (the projection of a
+//! single layer of spheres). Every triangle is a *cell*: a fluid cell (a virtual pore, VP) or a
+//! solid cell owned by one sphere. Cell volumes are `area × thickness`. Every triangle edge is a
+//! *face*. Fluid cells are linked by *channels*: T2T channels across the edge two fluid cells
+//! share (aperture A-Eq. 9) and S2S channels across a sphere–sphere contact (aperture A-Eq. 8).
+//!
+//! Storage is struct-of-arrays; indices are `u32`, with [`NONE`] for "no such entity".
+
+use serde::{Deserialize, Serialize};
+
+/// Index value meaning "none" (e.g. the missing second cell of a boundary face).
+pub const NONE: u32 = u32::MAX;
+
+/// What a triangle is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum CellKind {
+    /// A virtual pore: carries fluid.
+    Fluid,
+    /// Part of a sphere's cross-section.
+    Solid {
+        /// Index of the sphere (circle) that owns the cell.
+        owner: u32,
+    },
+}
+
+impl CellKind {
+    /// True for fluid cells (virtual pores).
+    pub fn is_fluid(self) -> bool {
+        matches!(self, CellKind::Fluid)
+    }
+}
+
+/// Which part of the specimen's outer boundary a boundary face lies on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BoundarySide {
+    /// Smallest x.
+    Left,
+    /// Largest x.
+    Right,
+    /// Smallest y.
+    Bottom,
+    /// Largest y.
+    Top,
+    /// On the outline but not on one of the four sides of the bounding box.
+    Outline,
+}
+
+/// Whether a face is shared by two cells or lies on the outer boundary.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum FaceKind {
+    /// Shared by two cells.
+    Interior,
+    /// On the outer boundary (only `face_cells[f][0]` is set).
+    Boundary(BoundarySide),
+}
+
+/// Kind of a fluid channel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum ChannelKind {
+    /// Triangle-to-triangle: across the edge shared by two fluid cells (A-Eq. 9).
+    T2T,
+    /// Sphere-to-sphere: across a contact between two spheres (A-Eq. 8).
+    S2S,
+}
+
+/// Fluid channels (struct-of-arrays).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Channels {
+    /// T2T or S2S.
+    pub kind: Vec<ChannelKind>,
+    /// The two fluid cells the channel joins.
+    pub cells: Vec<[u32; 2]>,
+    /// Distance between the centroids of the two cells [m].
+    pub length: Vec<f64>,
+    /// Hydraulic aperture h [m].
+    pub aperture: Vec<f64>,
+    /// For T2T: the shared face; for S2S: [`NONE`].
+    pub face: Vec<u32>,
+    /// For S2S: the index of the contact in the caller's contact list; for T2T: [`NONE`].
+    pub contact: Vec<u32>,
+}
+
+impl Channels {
+    /// Number of channels.
+    pub fn len(&self) -> usize {
+        self.kind.len()
+    }
+
+    /// True when there is no channel.
+    pub fn is_empty(&self) -> bool {
+        self.kind.is_empty()
+    }
+}
+
+/// The virtual pore network mesh.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct PoreMesh {
+    /// Out-of-plane thickness [m] that turns areas into volumes (paper A: the largest sphere
+    /// diameter).
+    pub thickness: f64,
+    /// Vertex positions [m].
+    pub vertices: Vec<[f64; 2]>,
+    /// For vertices on a circle: the sphere index; otherwise [`NONE`].
+    pub vertex_sphere: Vec<u32>,
+    /// Triangle corners, counter-clockwise.
+    pub cell_vertices: Vec<[u32; 3]>,
+    /// Fluid or solid (with owner).
+    pub cell_kind: Vec<CellKind>,
+    /// Cell areas [m²].
+    pub cell_area: Vec<f64>,
+    /// Cell centroids [m].
+    pub cell_centroid: Vec<[f64; 2]>,
+    /// For each cell, its three faces: face `k` joins corners `k` and `k+1`.
+    pub cell_faces: Vec<[u32; 3]>,
+    /// Face end points.
+    pub face_vertices: Vec<[u32; 2]>,
+    /// The cells on either side; `[c, NONE]` on the boundary.
+    pub face_cells: Vec<[u32; 2]>,
+    /// Face lengths [m].
+    pub face_length: Vec<f64>,
+    /// Unit normals pointing from `face_cells[f][0]` towards `face_cells[f][1]` (outward on the
+    /// boundary).
+    pub face_normal: Vec<[f64; 2]>,
+    /// Face mid-points [m].
+    pub face_centroid: Vec<[f64; 2]>,
+    /// Interior or boundary (with side).
+    pub face_kind: Vec<FaceKind>,
+    /// Fluid channels.
+    pub channels: Channels,
+}
+
+/// Errors of mesh construction from triangles.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TopologyError {
+    /// A triangle refers to a vertex that does not exist.
+    #[error("cell {cell}: vertex index {vertex} out of range (mesh has {n_vertices} vertices)")]
+    VertexOutOfRange {
+        /// Cell index.
+        cell: usize,
+        /// Offending vertex index.
+        vertex: u32,
+        /// Number of vertices.
+        n_vertices: usize,
+    },
+    /// A triangle has zero or negative area (after orientation it must be counter-clockwise).
+    #[error("cell {cell}: degenerate triangle (area {area:e} m²)")]
+    DegenerateCell {
+        /// Cell index.
+        cell: usize,
+        /// Its signed area.
+        area: f64,
+    },
+    /// An edge is shared by more than two triangles.
+    #[error("edge ({a}, {b}) is shared by more than two cells")]
+    NonManifoldEdge {
+        /// First vertex.
+        a: u32,
+        /// Second vertex.
+        b: u32,
+    },
+    /// Lengths of the input arrays disagree.
+    #[error("{what}: expected {expected} entries, got {got}")]
+    LengthMismatch {
+        /// Which array.
+        what: &'static str,
+        /// Expected length.
+        expected: usize,
+        /// Actual length.
+        got: usize,
+    },
+    /// A non-finite coordinate or parameter.
+    #[error("{what} {index}: non-finite value {value}")]
+    NonFinite {
+        /// Which quantity.
+        what: &'static str,
+        /// Its index.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// A parameter outside its range.
+    #[error("{name}: must be {range}, got {value}")]
+    OutOfRange {
+        /// Parameter name.
+        name: &'static str,
+        /// Allowed range, in words.
+        range: &'static str,
+        /// The value.
+        value: f64,
+    },
+}
+
+fn signed_area(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]))
+}
+
+impl PoreMesh {
+    /// Builds a mesh from vertices, triangles and cell kinds: orients triangles
+    /// counter-clockwise, creates faces (edges) with their two cells, tags boundary faces by
+    /// the side of the bounding box they lie on (within `side_tolerance` m), computes all
+    /// geometry, and creates a T2T channel for every face shared by two fluid cells with the
+    /// aperture of A-Eq. 9 using the reduction factor `t2t_reduction_factor` (γ).
+    ///
+    /// S2S channels are added separately (they need the contacts).
+    pub fn from_triangles(
+        vertices: Vec<[f64; 2]>,
+        vertex_sphere: Vec<u32>,
+        mut triangles: Vec<[u32; 3]>,
+        cell_kind: Vec<CellKind>,
+        thickness: f64,
+        side_tolerance: f64,
+        t2t_reduction_factor: f64,
+    ) -> Result<Self, TopologyError> {
+        let nv = vertices.len();
+        if vertex_sphere.len() != nv {
+            return Err(TopologyError::LengthMismatch {
+                what: "vertex_sphere",
+                expected: nv,
+                got: vertex_sphere.len(),
+            });
+        }
+        if cell_kind.len() != triangles.len() {
+            return Err(TopologyError::LengthMismatch {
+                what: "cell_kind",
+                expected: triangles.len(),
+                got: cell_kind.len(),
+            });
+        }
+        if !(thickness.is_finite() && thickness > 0.0) {
+            return Err(TopologyError::OutOfRange {
+                name: "thickness",
+                range: "> 0 m",
+                value: thickness,
+            });
+        }
+        if !(t2t_reduction_factor.is_finite() && t2t_reduction_factor > 0.0) {
+            return Err(TopologyError::OutOfRange {
+                name: "t2t_reduction_factor",
+                range: "> 0",
+                value: t2t_reduction_factor,
+            });
+        }
+        for (i, v) in vertices.iter().enumerate() {
+            for &x in v {
+                if !x.is_finite() {
+                    return Err(TopologyError::NonFinite {
+                        what: "vertex",
+                        index: i,
+                        value: x,
+                    });
+                }
+            }
+        }
+        for (c, t) in triangles.iter_mut().enumerate() {
+            for &v in t.iter() {
+                if v as usize >= nv {
+                    return Err(TopologyError::VertexOutOfRange {
+                        cell: c,
+                        vertex: v,
+                        n_vertices: nv,
+                    });
+                }
+            }
+            let a = signed_area(
+                vertices[t[0] as usize],
+                vertices[t[1] as usize],
+                vertices[t[2] as usize],
+            );
+            if a < 0.0 {
+                t.swap(1, 2);
+            } else if a <= 0.0 {
+                return Err(TopologyError::DegenerateCell { cell: c, area: a });
+            }
+        }
+
+        // Faces from sorted edge keys; deterministic order (by first appearance).
+        let nc = triangles.len();
+        let mut edge_map: std::collections::HashMap<(u32, u32), u32> =
+            std::collections::HashMap::with_capacity(nc * 2);
+        let mut face_vertices: Vec<[u32; 2]> = Vec::with_capacity(nc * 2);
+        let mut face_cells: Vec<[u32; 2]> = Vec::with_capacity(nc * 2);
+        let mut cell_faces = vec![[NONE; 3]; nc];
+        for (c, t) in triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let key = (a.min(b), a.max(b));
+                let f = match edge_map.get(&key) {
+                    Some(&f) => {
+                        let fc = &mut face_cells[f as usize];
+                        if fc[1] != NONE {
+                            return Err(TopologyError::NonManifoldEdge { a: key.0, b: key.1 });
+                        }
+                        fc[1] = c as u32;
+                        f
+                    }
+                    None => {
+                        let f = face_vertices.len() as u32;
+                        edge_map.insert(key, f);
+                        face_vertices.push([a, b]);
+                        face_cells.push([c as u32, NONE]);
+                        f
+                    }
+                };
+                cell_faces[c][k] = f;
+            }
+        }
+        let nf = face_vertices.len();
+        let mut mesh = PoreMesh {
+            thickness,
+            vertices,
+            vertex_sphere,
+            cell_vertices: triangles,
+            cell_kind,
+            cell_area: vec![0.0; nc],
+            cell_centroid: vec![[0.0; 2]; nc],
+            cell_faces,
+            face_vertices,
+            face_cells,
+            face_length: vec![0.0; nf],
+            face_normal: vec![[0.0; 2]; nf],
+            face_centroid: vec![[0.0; 2]; nf],
+            face_kind: vec![FaceKind::Interior; nf],
+            channels: Channels::default(),
+        };
+        mesh.update_geometry();
+        mesh.tag_boundary_sides(side_tolerance);
+        mesh.build_t2t_channels(t2t_reduction_factor);
+        Ok(mesh)
+    }
+
+    /// A structured triangulation of the rectangle `[0, lx] × [0, ly]` with `nx × ny` squares,
+    /// each split into two triangles along alternating diagonals; `kind(centroid)` sets each
+    /// cell's kind. Useful for verification of the flow and heat solvers.
+    #[allow(clippy::too_many_arguments)]
+    pub fn structured_rectangle(
+        nx: usize,
+        ny: usize,
+        lx: f64,
+        ly: f64,
+        thickness: f64,
+        t2t_reduction_factor: f64,
+        kind: impl Fn([f64; 2]) -> CellKind,
+    ) -> Result<Self, TopologyError> {
+        if nx == 0 || ny == 0 {
+            return Err(TopologyError::OutOfRange {
+                name: "nx, ny",
+                range: ">= 1",
+                value: nx.min(ny) as f64,
+            });
+        }
+        for (name, v) in [("lx", lx), ("ly", ly)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(TopologyError::OutOfRange {
+                    name,
+                    range: "> 0 m",
+                    value: v,
+                });
+            }
+        }
+        let mut vertices = Vec::with_capacity((nx + 1) * (ny + 1));
+        for j in 0..=ny {
+            for i in 0..=nx {
+                vertices.push([lx * i as f64 / nx as f64, ly * j as f64 / ny as f64]);
+            }
+        }
+        let id = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+        let mut tris = Vec::with_capacity(2 * nx * ny);
+        for j in 0..ny {
+            for i in 0..nx {
+                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+                if (i + j) % 2 == 0 {
+                    tris.push([a, b, c]);
+                    tris.push([a, c, d]);
+                } else {
+                    tris.push([a, b, d]);
+                    tris.push([b, c, d]);
+                }
+            }
+        }
+        let kinds = tris
+            .iter()
+            .map(|t| {
+                let p = t.map(|v| vertices[v as usize]);
+                kind([
+                    (p[0][0] + p[1][0] + p[2][0]) / 3.0,
+                    (p[0][1] + p[1][1] + p[2][1]) / 3.0,
+                ])
+            })
+            .collect();
+        let nvert = vertices.len();
+        let tol = 1e-9 * lx.max(ly);
+        Self::from_triangles(
+            vertices,
+            vec![NONE; nvert],
+            tris,
+            kinds,
+            thickness,
+            tol,
+            t2t_reduction_factor,
+        )
+    }
+
+    /// Number of cells.
+    pub fn n_cells(&self) -> usize {
+        self.cell_vertices.len()
+    }
+
+    /// Number of faces.
+    pub fn n_faces(&self) -> usize {
+        self.face_vertices.len()
+    }
+
+    /// Cell volume `area × thickness` [m³].
+    pub fn cell_volume(&self, cell: usize) -> f64 {
+        self.cell_area[cell] * self.thickness
+    }
+
+    /// Total area of the fluid cells [m²].
+    pub fn fluid_area(&self) -> f64 {
+        self.cell_area
+            .iter()
+            .zip(&self.cell_kind)
+            .filter(|(_, k)| k.is_fluid())
+            .map(|(a, _)| a)
+            .sum()
+    }
+
+    /// Total area of the solid cells [m²].
+    pub fn solid_area(&self) -> f64 {
+        self.cell_area
+            .iter()
+            .zip(&self.cell_kind)
+            .filter(|(_, k)| !k.is_fluid())
+            .map(|(a, _)| a)
+            .sum()
+    }
+
+    /// Recomputes cell areas and centroids and face lengths, normals and centroids from the
+    /// current vertex positions (after the vertices moved; topology unchanged).
+    pub fn update_geometry(&mut self) {
+        for (c, t) in self.cell_vertices.iter().enumerate() {
+            let p = t.map(|v| self.vertices[v as usize]);
+            self.cell_area[c] = signed_area(p[0], p[1], p[2]);
+            self.cell_centroid[c] = [
+                (p[0][0] + p[1][0] + p[2][0]) / 3.0,
+                (p[0][1] + p[1][1] + p[2][1]) / 3.0,
+            ];
+        }
+        for f in 0..self.face_vertices.len() {
+            let [a, b] = self.face_vertices[f];
+            let (pa, pb) = (self.vertices[a as usize], self.vertices[b as usize]);
+            let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
+            let len = (dx * dx + dy * dy).sqrt();
+            self.face_length[f] = len;
+            self.face_centroid[f] = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])];
+            // Edge (a, b) is traversed counter-clockwise by its first cell, so the outward
+            // normal of that cell is the edge direction rotated clockwise.
+            let inv = if len > 0.0 { 1.0 / len } else { 0.0 };
+            self.face_normal[f] = [dy * inv, -dx * inv];
+        }
+        for ch in 0..self.channels.len() {
+            let [a, b] = self.channels.cells[ch];
+            let (pa, pb) = (
+                self.cell_centroid[a as usize],
+                self.cell_centroid[b as usize],
+            );
+            self.channels.length[ch] = ((pb[0] - pa[0]).powi(2) + (pb[1] - pa[1]).powi(2)).sqrt();
+        }
+    }
+
+    fn tag_boundary_sides(&mut self, tol: f64) {
+        if self.vertices.is_empty() {
+            return;
+        }
+        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for v in &self.vertices {
+            x0 = x0.min(v[0]);
+            x1 = x1.max(v[0]);
+            y0 = y0.min(v[1]);
+            y1 = y1.max(v[1]);
+        }
+        for f in 0..self.face_vertices.len() {
+            if self.face_cells[f][1] != NONE {
+                continue;
+            }
+            let [a, b] = self.face_vertices[f];
+            let (pa, pb) = (self.vertices[a as usize], self.vertices[b as usize]);
+            let on = |u: f64, v: f64, s: f64| (u - s).abs() <= tol && (v - s).abs() <= tol;
+            let side = if on(pa[0], pb[0], x0) {
+                BoundarySide::Left
+            } else if on(pa[0], pb[0], x1) {
+                BoundarySide::Right
+            } else if on(pa[1], pb[1], y0) {
+                BoundarySide::Bottom
+            } else if on(pa[1], pb[1], y1) {
+                BoundarySide::Top
+            } else {
+                BoundarySide::Outline
+            };
+            self.face_kind[f] = FaceKind::Boundary(side);
+        }
+    }
+
+    /// Rebuilds all T2T channels (dropping existing ones of that kind) with aperture
+    /// `h = γ · e · cos(90° − ω)` (A-Eq. 9), where `e` is the shared edge length and `ω` the
+    /// angle between the edge and the line joining the two centroids.
+    pub fn build_t2t_channels(&mut self, reduction_factor: f64) {
+        let keep: Vec<usize> = (0..self.channels.len())
+            .filter(|&i| self.channels.kind[i] != ChannelKind::T2T)
+            .collect();
+        let old = std::mem::take(&mut self.channels);
+        for i in keep {
+            self.channels.kind.push(old.kind[i]);
+            self.channels.cells.push(old.cells[i]);
+            self.channels.length.push(old.length[i]);
+            self.channels.aperture.push(old.aperture[i]);
+            self.channels.face.push(old.face[i]);
+            self.channels.contact.push(old.contact[i]);
+        }
+        for f in 0..self.face_vertices.len() {
+            let [c0, c1] = self.face_cells[f];
+            if c1 == NONE
+                || !self.cell_kind[c0 as usize].is_fluid()
+                || !self.cell_kind[c1 as usize].is_fluid()
+            {
+                continue;
+            }
+            let (p0, p1) = (
+                self.cell_centroid[c0 as usize],
+                self.cell_centroid[c1 as usize],
+            );
+            let d = [p1[0] - p0[0], p1[1] - p0[1]];
+            let length = (d[0] * d[0] + d[1] * d[1]).sqrt();
+            // cos(90° − ω) = sin ω = |n · d| / |d|, with n the unit face normal.
+            let n = self.face_normal[f];
+            let sin_omega = if length > 0.0 {
+                (n[0] * d[0] + n[1] * d[1]).abs() / length
+            } else {
+                0.0
+            };
+            self.channels.kind.push(ChannelKind::T2T);
+            self.channels.cells.push([c0, c1]);
+            self.channels.length.push(length);
+            self.channels
+                .aperture
+                .push(reduction_factor * self.face_length[f] * sin_omega);
+            self.channels.face.push(f as u32);
+            self.channels.contact.push(NONE);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn structured_rectangle_areas_and_faces() {
+        let m =
+            PoreMesh::structured_rectangle(4, 3, 2.0, 1.5, 0.1, 1.0, |_| CellKind::Fluid).unwrap();
+        assert_eq!(m.n_cells(), 24);
+        // Euler: F = E - V + 1 (for a disk) -> E = V + F - 1.
+        assert_eq!(m.n_faces(), 20 + 24 - 1);
+        assert!((m.fluid_area() - 3.0).abs() < 1e-14);
+        let n_boundary = m
+            .face_kind
+            .iter()
+            .filter(|k| matches!(k, FaceKind::Boundary(_)))
+            .count();
+        assert_eq!(n_boundary, 2 * (4 + 3));
+        // Sum over each cell of outward normal × length vanishes (closed polygon).
+        for c in 0..m.n_cells() {
+            let mut s = [0.0; 2];
+            for &f in &m.cell_faces[c] {
+                let sign = if m.face_cells[f as usize][0] == c as u32 {
+                    1.0
+                } else {
+                    -1.0
+                };
+                for (sk, nk) in s.iter_mut().zip(m.face_normal[f as usize]) {
+                    *sk += sign * nk * m.face_length[f as usize];
+                }
+            }
+            assert!(s[0].abs() < 1e-14 && s[1].abs() < 1e-14);
+        }
+        // Every interior face joins two fluid cells: one T2T channel each.
+        assert_eq!(m.channels.len(), m.n_faces() - n_boundary);
+    }
+
+    #[test]
+    fn outward_normals_point_away_from_first_cell() {
+        let m =
+            PoreMesh::structured_rectangle(2, 2, 1.0, 1.0, 1.0, 1.0, |_| CellKind::Fluid).unwrap();
+        for f in 0..m.n_faces() {
+            let c = m.face_cells[f][0] as usize;
+            let d = [
+                m.face_centroid[f][0] - m.cell_centroid[c][0],
+                m.face_centroid[f][1] - m.cell_centroid[c][1],
+            ];
+            assert!(d[0] * m.face_normal[f][0] + d[1] * m.face_normal[f][1] > 0.0);
+        }
+    }
+
+    #[test]
+    fn bad_input_is_a_typed_error() {
+        let e = PoreMesh::from_triangles(
+            vec![[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]],
+            vec![NONE; 3],
+            vec![[0, 1, 2]],
+            vec![CellKind::Fluid],
+            1.0,
+            1e-9,
+            1.0,
+        )
+        .unwrap_err();
+        assert!(matches!(e, TopologyError::DegenerateCell { cell: 0, .. }));
+        let e = PoreMesh::from_triangles(
+            vec![[0.0, 0.0]],
+            vec![NONE],
+            vec![[0, 1, 2]],
+            vec![CellKind::Fluid],
+            1.0,
+            1e-9,
+            1.0,
+        )
+        .unwrap_err();
+        assert!(matches!(e, TopologyError::VertexOutOfRange { .. }));
+    }
+}
