@@ -38,9 +38,12 @@ pub trait PoreClosure {
 /// the analytic `∂P/∂ρ` of both phases, keeping a bracket `[lo, hi]` in which the difference
 /// changes sign. On the admissible interval (both molar volumes above the co-volume, both phases
 /// on their mechanically stable branches, `∂P/∂ρ > 0`) the pressure difference decreases
-/// strictly with α, so the root there is unique. States beyond a phase's spinodal are treated as
-/// lying above the root (their α is too large); if the difference stays positive up to the
-/// spinodal, no state with equal pressures on stable branches exists and a
+/// strictly with α, so the root there is unique. The liquid must be on its dense branch and the
+/// gas on its dilute one ([`EquationOfState::on_branch`]): where the liquid's cubic also has a
+/// vapour branch, a second root with the "liquid" expanded into vapour may exist, and it is
+/// never taken. Trial states past a spinodal or on the other branch lie above the wanted root
+/// (their α is too large) and shrink the bracket from above; if the difference stays positive up
+/// to the liquid's spinodal, no state with equal pressures on the stable branches exists and a
 /// [`EosError::NoClosure`] is returned.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TwoPhaseClosure<L, G> {
@@ -82,7 +85,7 @@ enum Trial {
         p_liquid: f64,
         p_gas: f64,
     },
-    /// A phase is past its spinodal (`∂P/∂ρ ≤ 0`): α is too large.
+    /// A phase is past its spinodal (`∂P/∂ρ ≤ 0`) or on its other branch: α is too large.
     Unstable,
 }
 
@@ -99,7 +102,10 @@ impl<L: EquationOfState, G: EquationOfState> TwoPhaseClosure<L, G> {
         let rho_g = c_g / gas_fraction;
         let (p_l, dpl) = self.liquid.pressure_and_dp_drho(t, rho_l)?;
         let (p_g, dpg) = self.gas.pressure_and_dp_drho(t, rho_g)?;
-        if !(dpl > 0.0 && dpg > 0.0) {
+        if !(dpl > 0.0 && dpg > 0.0)
+            || !self.liquid.on_branch(t, rho_l, Branch::Liquid)?
+            || !self.gas.on_branch(t, rho_g, Branch::Gas)?
+        {
             return Ok(Trial::Unstable);
         }
         // d/dα of P_l(c_l/α) − P_g(c_g/(1 − α)).
@@ -201,8 +207,8 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
 
         // First guess: the liquid at 0.1 MPa (it is nearly incompressible, so this is close).
         let mut alpha = match self.liquid.density(t, GUESS_PRESSURE, Branch::Liquid) {
-            Ok(rho) => c_l / rho,
-            Err(_) => f64::NAN,
+            Ok(rho) if self.liquid.on_branch(t, rho, Branch::Liquid)? => c_l / rho,
+            _ => f64::NAN,
         };
         if !(alpha > lo && alpha < hi) {
             alpha = 0.5 * (lo + hi);
@@ -237,8 +243,8 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
                     let newton = alpha - f / df;
                     let step_ok = newton > lo && newton < hi;
                     let candidate = if step_ok { newton } else { 0.5 * (lo + hi) };
-                    // Converged when the Newton correction is at round-off of α or 1 − α.
-                    let scale = alpha.min(1.0 - alpha);
+                    // Converged when the Newton correction is at the round-off of α itself.
+                    let scale = alpha;
                     if step_ok && (newton - alpha).abs() <= 4.0 * f64::EPSILON * scale {
                         converged = true;
                         break;
@@ -247,7 +253,7 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
                 }
             };
             // The bracket has collapsed to round-off: stop.
-            if hi - lo <= 4.0 * f64::EPSILON * alpha.min(1.0 - alpha) {
+            if hi - lo <= 4.0 * f64::EPSILON * alpha {
                 alpha = next;
                 if let Trial::Stable {
                     p_liquid, p_gas, ..
@@ -271,9 +277,7 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
         // on a spinodal with the liquid still above the gas pressure has none.
         let converged_to_root = seen_negative || {
             match self.trial(t, c_l, c_g, alpha)? {
-                Trial::Stable { f, df, .. } => {
-                    (f / df).abs() <= 8.0 * f64::EPSILON * alpha.min(1.0 - alpha)
-                }
+                Trial::Stable { f, df, .. } => (f / df).abs() <= 8.0 * f64::EPSILON * alpha,
                 Trial::Unstable => false,
             }
         };

@@ -154,6 +154,18 @@ impl EquationOfState for Iapws97Water {
         Ok(1.0e6 * expansion / kappa_t)
     }
 
+    fn on_branch(&self, temperature: f64, density: f64, branch: Branch) -> Result<bool, EosError> {
+        let t = check_range(temperature)?;
+        let rho = check_density(density)?;
+        // Below the critical temperature the liquid branch ends at the saturated liquid and the
+        // vapour branch at the saturated vapour (IF97's metastable extensions are not used for
+        // a phase's own state in a pore).
+        Ok(match branch {
+            Branch::Liquid => rho >= seuif97::tx(t - 273.15, 0.0, seuif97::OD),
+            Branch::Gas => rho <= seuif97::tx(t - 273.15, 1.0, seuif97::OD),
+        })
+    }
+
     fn max_density(&self, _temperature: f64) -> f64 {
         RHO_MAX
     }

@@ -52,6 +52,15 @@ pub trait EquationOfState {
         ))
     }
 
+    /// Whether a state that is mechanically stable (`∂P/∂ρ > 0`) lies on the requested branch:
+    /// on a subcritical isotherm the dense (`Liquid`) or dilute (`Gas`) stable branch, on a
+    /// supercritical isotherm (one stable branch) always. The default is for models with a
+    /// single stable branch: always true.
+    fn on_branch(&self, temperature: f64, density: f64, branch: Branch) -> Result<bool, EosError> {
+        let _ = (temperature, density, branch);
+        Ok(true)
+    }
+
     /// The density at which the equation's domain ends at this temperature [kg/m³]
     /// (`f64::INFINITY` if none). For Peng–Robinson, where the molar volume reaches `b`.
     fn max_density(&self, temperature: f64) -> f64;
@@ -80,6 +89,10 @@ impl<E: EquationOfState + ?Sized> EquationOfState for &E {
     #[inline]
     fn pressure_and_dp_drho(&self, temperature: f64, density: f64) -> Result<(f64, f64), EosError> {
         (**self).pressure_and_dp_drho(temperature, density)
+    }
+    #[inline]
+    fn on_branch(&self, temperature: f64, density: f64, branch: Branch) -> Result<bool, EosError> {
+        (**self).on_branch(temperature, density, branch)
     }
     #[inline]
     fn max_density(&self, temperature: f64) -> f64 {

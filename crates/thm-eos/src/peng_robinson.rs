@@ -14,6 +14,18 @@ const OMEGA_B: f64 = 0.07780;
 /// The Péneloux volume shift of liquid water, A-Eq. 23 and Sect. 2.2.2 [m³/kmol].
 pub const WATER_VOLUME_SHIFT: f64 = -0.0034;
 
+/// `x_m = V/b` at which `L(x) = (x² + 2x − 1)² / ((x + 1)(x − 1)²)` is smallest.
+///
+/// `∂P/∂V < 0` (A-Eq. 16) is equivalent to `L(V/b) > θ(T) = 2a(T)/(R T b)`. `L` falls from
+/// +∞ at `x = 1` to its minimum at `x_m` and rises again, so on a subcritical isotherm
+/// (`θ > L(x_m)`) the liquid spinodal lies below `x_m` and the vapour spinodal above it: a stable
+/// state with `V/b < x_m` is on the dense branch, one with `V/b > x_m` on the dilute branch. The
+/// number is universal (independent of the fluid and of Ω_a, Ω_b); its stationarity is checked
+/// by a unit test.
+pub(crate) const BRANCH_SPLIT: f64 = 3.951_373_035_591_441;
+/// `L(x_m)`: the value of θ at the equation's own critical temperature.
+pub(crate) const CRITICAL_THETA: f64 = 11.754_719_897_208_806;
+
 /// Parameters of one fluid for the Peng–Robinson equation, as read from a file or a preset.
 ///
 /// Validated once into a [`PengRobinson`] by [`PengRobinson::new`].
@@ -468,6 +480,21 @@ impl EquationOfState for PengRobinson {
         Ok(GAS_CONSTANT / (v - b) - da_dt / (v * (v + 2.0 * b) - b * b))
     }
 
+    #[inline]
+    fn on_branch(&self, temperature: f64, density: f64, branch: Branch) -> Result<bool, EosError> {
+        let t = check_temperature(temperature)?;
+        let v = self.molar_volume(check_density(density)?)?;
+        let theta = 2.0 * self.attraction(t) / (GAS_CONSTANT * t * self.covolume);
+        if theta <= CRITICAL_THETA {
+            return Ok(true);
+        }
+        let x = v / self.covolume;
+        Ok(match branch {
+            Branch::Liquid => x < BRANCH_SPLIT,
+            Branch::Gas => x > BRANCH_SPLIT,
+        })
+    }
+
     fn max_density(&self, _temperature: f64) -> f64 {
         self.max_density_value()
     }
@@ -504,6 +531,18 @@ mod tests {
         let (r, n) = cubic_real_roots(-2.0, 1.0, -2.0);
         assert_eq!(n, 1);
         assert!((r[0] - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn branch_split_is_the_minimum_of_l() {
+        let l = |x: f64| (x * x + 2.0 * x - 1.0).powi(2) / ((x + 1.0) * (x - 1.0).powi(2));
+        let h = 1e-5;
+        let slope = (l(BRANCH_SPLIT + h) - l(BRANCH_SPLIT - h)) / (2.0 * h);
+        assert!(slope.abs() < 1e-8, "dL/dx at x_m = {slope}");
+        assert!(
+            l(BRANCH_SPLIT + 1e-3) > l(BRANCH_SPLIT) && l(BRANCH_SPLIT - 1e-3) > l(BRANCH_SPLIT)
+        );
+        assert!((l(BRANCH_SPLIT) / CRITICAL_THETA - 1.0).abs() < 1e-14);
     }
 
     #[test]
