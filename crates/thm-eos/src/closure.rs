@@ -102,10 +102,11 @@ impl<L: EquationOfState, G: EquationOfState> TwoPhaseClosure<L, G> {
         let rho_g = c_g / gas_fraction;
         let (p_l, dpl) = self.liquid.pressure_and_dp_drho(t, rho_l)?;
         let (p_g, dpg) = self.gas.pressure_and_dp_drho(t, rho_g)?;
-        if !(dpl > 0.0 && dpg > 0.0)
-            || !self.liquid.on_branch(t, rho_l, Branch::Liquid)?
-            || !self.gas.on_branch(t, rho_g, Branch::Gas)?
-        {
+        let stable = dpl > 0.0
+            && dpg > 0.0
+            && self.liquid.on_branch(t, rho_l, Branch::Liquid)?
+            && self.gas.on_branch(t, rho_g, Branch::Gas)?;
+        if !stable {
             return Ok(Trial::Unstable);
         }
         // d/dα of P_l(c_l/α) − P_g(c_g/(1 − α)).
