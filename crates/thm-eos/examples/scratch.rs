@@ -1,6 +1,14 @@
-use thm_eos::*;
 fn main() {
-    let c = water_air_closure(Model::Pr);
-    let r = c.close(278.15, 1e-9, 8.507012969349958e-7, 1.2534515684176752e-11);
-    println!("{r:?}");
+    for c in thm_eos::verification::cases() {
+        let o = (c.run)().unwrap();
+        for r in o.rows {
+            println!(
+                "{} | {} | {:.6e} | {:.6e} | {:.3e} | {} | {}",
+                c.name, r.quantity, r.measured, r.reference, r.error, r.tolerance, r.pass
+            );
+        }
+        for n in o.notes {
+            println!("   note: {n}");
+        }
+    }
 }

@@ -313,18 +313,18 @@ impl PengRobinson {
             - self.attraction(temperature) / (v * (v + 2.0 * b) - b * b)
     }
 
-    /// Pressure and `∂P/∂V` at molar volume `V > b` (not checked).
+    /// Pressure and `∂P/∂V` at molar volume `V > b` (not checked). The pressure is computed by
+    /// exactly the expression of [`Self::pressure_at_molar_volume`], so both give the same bits.
     #[inline]
     fn pressure_and_dp_dv(&self, temperature: f64, v: f64) -> (f64, f64) {
         let b = self.covolume;
         let a = self.attraction(temperature);
-        let inv_vb = 1.0 / (v - b);
+        let vb = v - b;
         let denom = v * (v + 2.0 * b) - b * b;
-        let inv_denom = 1.0 / denom;
-        let rt_vb = GAS_CONSTANT * temperature * inv_vb;
-        let a_d = a * inv_denom;
+        let rt_vb = GAS_CONSTANT * temperature / vb;
+        let a_d = a / denom;
         let p = rt_vb - a_d;
-        let dp_dv = -rt_vb * inv_vb + 2.0 * (v + b) * a_d * inv_denom;
+        let dp_dv = -rt_vb / vb + 2.0 * (v + b) * a_d / denom;
         (p, dp_dv)
     }
 
