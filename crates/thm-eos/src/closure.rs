@@ -7,8 +7,11 @@ use serde::{Deserialize, Serialize};
 /// The state of a pore after the closure: phase fractions, densities and the common pressure.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ClosureState {
-    /// Liquid volume fraction α ∈ [0, 1]; the gas fraction is `1 − α`.
+    /// Liquid volume fraction α ∈ [0, 1].
     pub liquid_fraction: f64,
+    /// Gas volume fraction `1 − α`, computed directly where it is the smaller one (so a trace
+    /// of gas keeps its own relative precision): `(gas_fraction) · gas_density · V = m_gas`.
+    pub gas_fraction: f64,
     /// The common pressure of both phases [Pa].
     pub pressure: f64,
     /// Liquid density [kg/m³]: `m_liquid / (α V)`; with no liquid (α = 0), the liquid's
@@ -36,7 +39,11 @@ pub trait PoreClosure {
 ///
 /// Solves `P_l(m_l/(αV)) = P_g(m_g/((1 − α)V))` for α by a safeguarded Newton iteration with
 /// the analytic `∂P/∂ρ` of both phases, keeping a bracket `[lo, hi]` in which the difference
-/// changes sign. On the admissible interval (both molar volumes above the co-volume, both phases
+/// changes sign (a step that would leave it is replaced by bisection). The unknown is the
+/// volume fraction of the phase that takes less room (α, or 1 − α for a nearly full liquid
+/// pore), so that it converges to its own round-off: α to ~1e-16, a trace gas fraction to its
+/// relative round-off. The first guess is the liquid's volume at 0.1 MPa; a typical closure
+/// takes 3–6 iterations. On the admissible interval (both molar volumes above the co-volume, both phases
 /// on their mechanically stable branches, `∂P/∂ρ > 0`) the pressure difference decreases
 /// strictly with α, so the root there is unique. The liquid must be on its dense branch and the
 /// gas on its dilute one ([`EquationOfState::on_branch`]): where the liquid's cubic also has a
@@ -76,6 +83,36 @@ fn check_nonnegative(
     }
 }
 
+/// Which phase's volume fraction the solver iterates on.
+#[derive(Debug, Clone, Copy)]
+enum Unknown {
+    /// x = α.
+    Liquid,
+    /// x = 1 − α.
+    Gas,
+}
+
+impl Unknown {
+    /// (α, 1 − α) from the unknown, each computed without subtracting a small number from 1
+    /// where that phase's fraction is the unknown.
+    #[inline]
+    fn fractions(self, x: f64) -> (f64, f64) {
+        match self {
+            Unknown::Liquid => (x, 1.0 - x),
+            Unknown::Gas => (1.0 - x, x),
+        }
+    }
+
+    /// `g = ±(P_l − P_g)`, oriented to decrease with x (P_l − P_g decreases with α).
+    #[inline]
+    fn orient(self, f: f64) -> f64 {
+        match self {
+            Unknown::Liquid => f,
+            Unknown::Gas => -f,
+        }
+    }
+}
+
 /// What one evaluation of the pressure difference found.
 enum Trial {
     /// Both phases on stable branches: `f = P_l − P_g`, `df/dα`, and the two pressures.
@@ -96,8 +133,14 @@ impl<L: EquationOfState, G: EquationOfState> TwoPhaseClosure<L, G> {
     }
 
     #[inline]
-    fn trial(&self, t: f64, c_l: f64, c_g: f64, alpha: f64) -> Result<Trial, EosError> {
-        let gas_fraction = 1.0 - alpha;
+    fn trial(
+        &self,
+        t: f64,
+        c_l: f64,
+        c_g: f64,
+        alpha: f64,
+        gas_fraction: f64,
+    ) -> Result<Trial, EosError> {
         let rho_l = c_l / alpha;
         let rho_g = c_g / gas_fraction;
         let (p_l, dpl) = self.liquid.pressure_and_dp_drho(t, rho_l)?;
@@ -173,6 +216,7 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
             }
             return Ok(ClosureState {
                 liquid_fraction: 1.0,
+                gas_fraction: 0.0,
                 pressure: p,
                 liquid_density: rho_l,
                 gas_density: Self::single_phase_density(&self.gas, t, p, Branch::Gas)?,
@@ -188,6 +232,7 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
             }
             return Ok(ClosureState {
                 liquid_fraction: 0.0,
+                gas_fraction: 1.0,
                 pressure: p,
                 liquid_density: Self::single_phase_density(&self.liquid, t, p, Branch::Liquid)?,
                 gas_density: rho_g,
@@ -197,31 +242,49 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
         // Masses per unit pore volume: ρ_l = c_l/α, ρ_g = c_g/(1 − α).
         let c_l = m_l / pore_volume;
         let c_g = m_g / pore_volume;
-        // The admissible interval: both molar volumes above their co-volumes.
-        let mut lo = c_l / self.liquid.max_density(t);
-        let mut hi = 1.0 - c_g / self.gas.max_density(t);
-        if lo >= hi || lo.is_nan() || hi.is_nan() {
+        let rho_l_max = self.liquid.max_density(t);
+        let rho_g_max = self.gas.max_density(t);
+        if c_l / rho_l_max + c_g / rho_g_max >= 1.0 {
             return Err(no_closure(
                 "the phases do not fit in the pore even at their co-volumes",
             ));
         }
 
         // First guess: the liquid at 0.1 MPa (it is nearly incompressible, so this is close).
-        let mut alpha = match self.liquid.density(t, GUESS_PRESSURE, Branch::Liquid) {
+        let alpha_guess = match self.liquid.density(t, GUESS_PRESSURE, Branch::Liquid) {
             Ok(rho) if self.liquid.on_branch(t, rho, Branch::Liquid)? => c_l / rho,
             _ => f64::NAN,
         };
-        if !(alpha > lo && alpha < hi) {
-            alpha = 0.5 * (lo + hi);
-        }
+        // The unknown is the fraction of the phase that takes less room, so that a small
+        // fraction is resolved to its own round-off rather than to that of 1 − it.
+        let unknown = if alpha_guess > 0.5 {
+            Unknown::Gas
+        } else {
+            Unknown::Liquid
+        };
+        let (mut lo, mut hi, guess) = match unknown {
+            Unknown::Liquid => (c_l / rho_l_max, 1.0 - c_g / rho_g_max, alpha_guess),
+            Unknown::Gas => (c_g / rho_g_max, 1.0 - c_l / rho_l_max, 1.0 - alpha_guess),
+        };
+        let mut x = if guess > lo && guess < hi {
+            guess
+        } else {
+            0.5 * (lo + hi)
+        };
 
-        let mut seen_negative = false;
+        // Safeguarded Newton on g(x) = ±(P_l − P_g), oriented so that g decreases with x.
+        let mut seen_liquid_below_gas = false;
         let mut converged = false;
-        let mut last: Option<(f64, f64, f64)> = None; // (alpha, p_liquid, p_gas) of the last stable trial
+        let mut last: Option<(f64, f64, f64)> = None; // (x, p_liquid, p_gas) of the last stable trial
         for _ in 0..MAX_ITERATIONS {
-            let next = match self.trial(t, c_l, c_g, alpha)? {
+            let (alpha, gamma) = unknown.fractions(x);
+            let next = match self.trial(t, c_l, c_g, alpha, gamma)? {
                 Trial::Unstable => {
-                    hi = alpha;
+                    // α is too large: x too large for the liquid, too small for the gas.
+                    match unknown {
+                        Unknown::Liquid => hi = x,
+                        Unknown::Gas => lo = x,
+                    }
                     0.5 * (lo + hi)
                 }
                 Trial::Stable {
@@ -230,55 +293,59 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
                     p_liquid,
                     p_gas,
                 } => {
-                    last = Some((alpha, p_liquid, p_gas));
+                    last = Some((x, p_liquid, p_gas));
                     if f == 0.0 {
                         converged = true;
                         break;
                     }
-                    if f > 0.0 {
-                        lo = alpha;
-                    } else {
-                        hi = alpha;
-                        seen_negative = true;
+                    if f < 0.0 {
+                        seen_liquid_below_gas = true;
                     }
-                    let newton = alpha - f / df;
+                    let g = unknown.orient(f);
+                    if g > 0.0 {
+                        lo = x;
+                    } else {
+                        hi = x;
+                    }
+                    // dg/dx = df/dα for both orientations.
+                    let newton = x - g / df;
                     let step_ok = newton > lo && newton < hi;
-                    let candidate = if step_ok { newton } else { 0.5 * (lo + hi) };
-                    // Converged when the Newton correction is at the round-off of α itself.
-                    let scale = alpha;
-                    if step_ok && (newton - alpha).abs() <= 4.0 * f64::EPSILON * scale {
+                    // Converged when the Newton correction is at the round-off of x itself.
+                    if step_ok && (newton - x).abs() <= 4.0 * f64::EPSILON * x {
                         converged = true;
                         break;
                     }
-                    candidate
+                    if step_ok { newton } else { 0.5 * (lo + hi) }
                 }
             };
             // The bracket has collapsed to round-off: stop.
-            if hi - lo <= 4.0 * f64::EPSILON * alpha {
-                alpha = next;
+            if hi - lo <= 4.0 * f64::EPSILON * x {
+                x = next;
+                let (alpha, gamma) = unknown.fractions(x);
                 if let Trial::Stable {
                     p_liquid, p_gas, ..
-                } = self.trial(t, c_l, c_g, alpha)?
+                } = self.trial(t, c_l, c_g, alpha, gamma)?
                 {
-                    last = Some((alpha, p_liquid, p_gas));
+                    last = Some((x, p_liquid, p_gas));
                 }
                 converged = true;
                 break;
             }
-            alpha = next;
+            x = next;
         }
 
         if !converged {
             return Err(no_closure("the solver did not converge"));
         }
-        let Some((alpha, p_l, p_g)) = last else {
+        let Some((x, p_l, p_g)) = last else {
             return Err(no_closure("both phases cannot be on stable branches"));
         };
+        let (alpha, gamma) = unknown.fractions(x);
         // A root needs a sign change or a vanishing Newton correction; a bracket that collapsed
         // on a spinodal with the liquid still above the gas pressure has none.
-        let converged_to_root = seen_negative || {
-            match self.trial(t, c_l, c_g, alpha)? {
-                Trial::Stable { f, df, .. } => (f / df).abs() <= 8.0 * f64::EPSILON * alpha,
+        let converged_to_root = seen_liquid_below_gas || {
+            match self.trial(t, c_l, c_g, alpha, gamma)? {
+                Trial::Stable { f, df, .. } => (f / df).abs() <= 8.0 * f64::EPSILON * x,
                 Trial::Unstable => false,
             }
         };
@@ -289,9 +356,10 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
         }
         Ok(ClosureState {
             liquid_fraction: alpha,
+            gas_fraction: gamma,
             pressure: 0.5 * (p_l + p_g),
             liquid_density: c_l / alpha,
-            gas_density: c_g / (1.0 - alpha),
+            gas_density: c_g / gamma,
         })
     }
 }

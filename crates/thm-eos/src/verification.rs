@@ -264,7 +264,7 @@ fn closure_80_20() -> Result<CaseOutput, CaseError> {
             Row::relative(
                 "gas mass (1 - alpha) rho_g V",
                 "kg",
-                (1.0 - s.liquid_fraction) * s.gas_density * volume,
+                s.gas_fraction * s.gas_density * volume,
                 m_g,
                 1e-15,
             ),
