@@ -309,13 +309,18 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
                     }
                     // dg/dx = df/dα for both orientations.
                     let newton = x - g / df;
-                    let step_ok = newton > lo && newton < hi;
-                    // Converged when the Newton correction is at the round-off of x itself.
-                    if step_ok && (newton - x).abs() <= 4.0 * f64::EPSILON * x {
+                    // Converged when the Newton correction is at the round-off of x itself
+                    // (checked before the bracket test: at convergence the correction may
+                    // point just outside a bracket end set to x itself).
+                    if (newton - x).abs() <= 4.0 * f64::EPSILON * x {
                         converged = true;
                         break;
                     }
-                    if step_ok { newton } else { 0.5 * (lo + hi) }
+                    if newton > lo && newton < hi {
+                        newton
+                    } else {
+                        0.5 * (lo + hi)
+                    }
                 }
             };
             // The bracket has collapsed to round-off: stop.

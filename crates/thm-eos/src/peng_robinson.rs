@@ -309,8 +309,12 @@ impl PengRobinson {
     pub fn pressure_at_molar_volume(&self, temperature: f64, molar_volume: f64) -> f64 {
         let b = self.covolume;
         let v = molar_volume;
-        GAS_CONSTANT * temperature / (v - b)
-            - self.attraction(temperature) / (v * (v + 2.0 * b) - b * b)
+        let vb = v - b;
+        let denom = v * (v + 2.0 * b) - b * b;
+        // RT/(V − b) − a/denom over one division.
+        let rt = GAS_CONSTANT * temperature;
+        let d = vb * denom;
+        (rt * denom - self.attraction(temperature) * vb) / d
     }
 
     /// Pressure and `∂P/∂V` at molar volume `V > b` (not checked). The pressure is computed by
@@ -321,10 +325,11 @@ impl PengRobinson {
         let a = self.attraction(temperature);
         let vb = v - b;
         let denom = v * (v + 2.0 * b) - b * b;
-        let rt_vb = GAS_CONSTANT * temperature / vb;
-        let a_d = a / denom;
-        let p = rt_vb - a_d;
-        let dp_dv = -rt_vb / vb + 2.0 * (v + b) * a_d / denom;
+        let rt = GAS_CONSTANT * temperature;
+        let d = vb * denom;
+        let p = (rt * denom - a * vb) / d;
+        // −RT/(V − b)² + 2a(V + b)/denom² over one (independent) division.
+        let dp_dv = (2.0 * a * (v + b) * vb * vb - rt * denom * denom) / (d * d);
         (p, dp_dv)
     }
 
@@ -363,6 +368,9 @@ impl PengRobinson {
     }
 
     /// Density on the requested branch at (T, P > 0), unchecked inputs.
+    ///
+    /// Same roots as [`Self::molar_volume_roots`], but only the wanted one is computed and
+    /// polished: the liquid is the smallest root above `B`, the gas the largest.
     #[inline]
     fn density_unchecked(
         &self,
@@ -370,18 +378,77 @@ impl PengRobinson {
         pressure: f64,
         branch: Branch,
     ) -> Result<f64, EosError> {
-        let (roots, n) = self.molar_volume_roots(temperature, pressure);
-        if n == 0 {
-            return Err(EosError::NoRoot {
+        let rt = GAS_CONSTANT * temperature;
+        let big_a = self.attraction(temperature) * pressure / (rt * rt);
+        let big_b = self.covolume * pressure / rt;
+        let a2 = -(1.0 - big_b);
+        let a1 = big_a - 3.0 * big_b * big_b - 2.0 * big_b;
+        let a0 = -(big_a * big_b - big_b * big_b - big_b * big_b * big_b);
+        let z = match depressed_cubic(a2, a1, a0) {
+            Depressed::One(t) => Some(polish_cubic_root(a2, a1, a0, t - a2 / 3.0)),
+            Depressed::Three { r, phi } => {
+                let shift = a2 / 3.0;
+                let root = |offset: f64| {
+                    polish_cubic_root(a2, a1, a0, 2.0 * r * (phi + offset).cos() - shift)
+                };
+                match branch {
+                    // Smallest, then middle, then largest: the first above B.
+                    Branch::Liquid => [TWO_PI_3, -TWO_PI_3, 0.0]
+                        .into_iter()
+                        .map(root)
+                        .find(|&z| z > big_b),
+                    Branch::Gas => Some(root(0.0)),
+                }
+            }
+        };
+        match z {
+            Some(z) if z > big_b => {
+                let v = z * rt / pressure;
+                Ok(self.params.molar_mass / (v + self.params.volume_shift))
+            }
+            _ => Err(EosError::NoRoot {
                 temperature,
                 pressure,
-            });
+            }),
         }
-        let v = match branch {
-            Branch::Liquid => roots[0],
-            Branch::Gas => roots[n - 1],
+    }
+}
+
+/// 2π/3.
+const TWO_PI_3: f64 = 2.0 * std::f64::consts::PI / 3.0;
+
+/// The real roots of a depressed cubic `t³ + p t + q = 0` (with `x = t − a2/3`).
+enum Depressed {
+    /// One real root `t`.
+    One(f64),
+    /// Three real roots `t_k = 2r cos(φ − 2πk/3)`: k = 0 largest, `φ + 2π/3` smallest.
+    Three { r: f64, phi: f64 },
+}
+
+#[inline]
+fn depressed_cubic(a2: f64, a1: f64, a0: f64) -> Depressed {
+    let shift = a2 / 3.0;
+    let p = a1 - a2 * shift;
+    let q = (2.0 * shift * shift - a1) * shift + a0;
+    let half_q = 0.5 * q;
+    let third_p = p / 3.0;
+    let disc = half_q * half_q + third_p * third_p * third_p;
+    if disc > 0.0 || third_p >= 0.0 {
+        // t = u − (p/3)/u, u = cbrt(−q/2 ∓ √disc) with the sign that avoids cancellation.
+        let sq = disc.max(0.0).sqrt();
+        let u = if half_q > 0.0 {
+            (-half_q - sq).cbrt()
+        } else {
+            (-half_q + sq).cbrt()
         };
-        Ok(self.params.molar_mass / (v + self.params.volume_shift))
+        Depressed::One(if u != 0.0 { u - third_p / u } else { 0.0 })
+    } else {
+        let r = (-third_p).sqrt();
+        let cos_arg = (-half_q / (r * r * r)).clamp(-1.0, 1.0);
+        Depressed::Three {
+            r,
+            phi: cos_arg.acos() / 3.0,
+        }
     }
 }
 
@@ -392,32 +459,12 @@ impl PengRobinson {
 #[inline]
 pub(crate) fn cubic_real_roots(a2: f64, a1: f64, a0: f64) -> ([f64; 3], usize) {
     let shift = a2 / 3.0;
-    // Depressed cubic t³ + p t + q = 0 with x = t − a2/3.
-    let p = a1 - a2 * shift;
-    let q = (2.0 * shift * shift - a1) * shift + a0;
-    let half_q = 0.5 * q;
-    let third_p = p / 3.0;
-    let disc = half_q * half_q + third_p * third_p * third_p;
-    if disc > 0.0 || third_p >= 0.0 {
-        // One real root: t = u + v, u = cbrt(−q/2 ∓ √disc) with the sign that avoids cancellation.
-        let sq = disc.max(0.0).sqrt();
-        let u = if half_q > 0.0 {
-            (-half_q - sq).cbrt()
-        } else {
-            (-half_q + sq).cbrt()
-        };
-        let t = if u != 0.0 { u - third_p / u } else { 0.0 };
-        ([t - shift, t - shift, t - shift], 1)
-    } else {
-        let r = (-third_p).sqrt();
-        let cos_arg = (-half_q / (r * r * r)).clamp(-1.0, 1.0);
-        let phi = cos_arg.acos() / 3.0;
-        let two_r = 2.0 * r;
-        const TWO_PI_3: f64 = 2.0 * std::f64::consts::PI / 3.0;
-        let t0 = two_r * phi.cos(); // largest
-        let t1 = two_r * (phi - TWO_PI_3).cos(); // middle
-        let t2 = two_r * (phi + TWO_PI_3).cos(); // smallest
-        ([t2 - shift, t1 - shift, t0 - shift], 3)
+    match depressed_cubic(a2, a1, a0) {
+        Depressed::One(t) => ([t - shift; 3], 1),
+        Depressed::Three { r, phi } => {
+            let root = |offset: f64| 2.0 * r * (phi + offset).cos() - shift;
+            ([root(TWO_PI_3), root(-TWO_PI_3), root(0.0)], 3)
+        }
     }
 }
 
