@@ -103,6 +103,15 @@ impl Unknown {
         }
     }
 
+    /// The other phase's fraction as the unknown.
+    #[inline]
+    fn flip(self) -> Self {
+        match self {
+            Unknown::Liquid => Unknown::Gas,
+            Unknown::Gas => Unknown::Liquid,
+        }
+    }
+
     /// `g = ±(P_l − P_g)`, oriented to decrease with x (P_l − P_g decreases with α).
     #[inline]
     fn orient(self, f: f64) -> f64 {
@@ -257,7 +266,7 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
         };
         // The unknown is the fraction of the phase that takes less room, so that a small
         // fraction is resolved to its own round-off rather than to that of 1 − it.
-        let unknown = if alpha_guess > 0.5 {
+        let mut unknown = if alpha_guess > 0.5 {
             Unknown::Gas
         } else {
             Unknown::Liquid
@@ -277,6 +286,13 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
         let mut converged = false;
         let mut last: Option<(f64, f64, f64)> = None; // (x, p_liquid, p_gas) of the last stable trial
         for _ in 0..MAX_ITERATIONS {
+            // Keep the unknown the smaller fraction: 1 − x is exact for x in [1/2, 1]
+            // (Sterbenz), so switching loses nothing.
+            if x > 0.5 {
+                x = 1.0 - x;
+                (lo, hi) = (1.0 - hi, 1.0 - lo);
+                unknown = unknown.flip();
+            }
             let (alpha, gamma) = unknown.fractions(x);
             let next = match self.trial(t, c_l, c_g, alpha, gamma)? {
                 Trial::Unstable => {

@@ -384,7 +384,33 @@ impl PengRobinson {
         let a2 = -(1.0 - big_b);
         let a1 = big_a - 3.0 * big_b * big_b - 2.0 * big_b;
         let a0 = -(big_a * big_b - big_b * big_b - big_b * big_b * big_b);
-        let z = match depressed_cubic(a2, a1, a0) {
+        let depressed = depressed_cubic(a2, a1, a0);
+        // Which side of the inflection point the wanted root lies on. With one root above B both
+        // branches take the same path, so they give the same bits.
+        let side = match depressed {
+            Depressed::One(_) => {
+                let zi = -a2 / 3.0;
+                if ((zi + a2) * zi + a1) * zi + a0 < 0.0 {
+                    Branch::Gas
+                } else {
+                    Branch::Liquid
+                }
+            }
+            Depressed::Three { .. } => {
+                // p(B) < 0 puts B left of the smallest root or between the middle and the
+                // largest; left of the local maximum it is the former (three roots above B),
+                // right of it only the largest root lies above B.
+                let local_max = (-a2 - (a2 * a2 - 3.0 * a1).max(0.0).sqrt()) / 3.0;
+                if big_b < local_max {
+                    branch
+                } else {
+                    Branch::Gas
+                }
+            }
+        };
+        // Fast path: Newton from a bound on that side, monotone where the cubic keeps its
+        // curvature; the closed form otherwise.
+        let z = monotone_newton(a2, a1, a0, big_b, side).or_else(|| match depressed {
             Depressed::One(t) => Some(polish_cubic_root(a2, a1, a0, t - a2 / 3.0)),
             Depressed::Three { r, phi } => {
                 let shift = a2 / 3.0;
@@ -400,7 +426,7 @@ impl PengRobinson {
                     Branch::Gas => Some(root(0.0)),
                 }
             }
-        };
+        });
         match z {
             Some(z) if z > big_b => {
                 let v = z * rt / pressure;
@@ -414,10 +440,62 @@ impl PengRobinson {
     }
 }
 
+/// Newton's method on the cubic in Z from a bound on the wanted side of the wanted root, used
+/// only where it is monotone.
+///
+/// The cubic `p(Z)` has `p(B) = −2B² < 0`, and its largest root is at most `1 + B` (from
+/// A-Eq. 16, `P ≤ RT/(V − b)`), where `p ≥ 0`. Left of the inflection point `Z_i = −a2/3` the
+/// cubic is concave: from `Z = B` with `p'(B) > 0`, Newton's iterates rise monotonically to the
+/// smallest root above B (the liquid). Right of it the cubic is convex: from `1 + B`, they fall
+/// monotonically to the largest root (the gas). If an iterate would cross `Z_i` the wanted root
+/// is on the other side of the inflection and `None` sends the caller to the closed form.
+#[inline]
+fn monotone_newton(a2: f64, a1: f64, a0: f64, big_b: f64, branch: Branch) -> Option<f64> {
+    let inflection = -a2 / 3.0;
+    let mut z = match branch {
+        Branch::Liquid => big_b,
+        Branch::Gas => 1.0 + big_b,
+    };
+    let on_side = |z: f64| match branch {
+        Branch::Liquid => z < inflection,
+        Branch::Gas => z > inflection,
+    };
+    if !on_side(z) {
+        return None;
+    }
+    for _ in 0..MAX_NEWTON {
+        let f = ((z + a2) * z + a1) * z + a0;
+        let df = (3.0 * z + 2.0 * a2) * z + a1;
+        if df <= 0.0 {
+            return None;
+        }
+        let step = f / df;
+        let next = z - step;
+        if !on_side(next) {
+            return None;
+        }
+        // Monotone: the step points towards the root; a step that does not (round-off at the
+        // root) or that is at the round-off of z ends the iteration.
+        let towards = match branch {
+            Branch::Liquid => step <= 0.0,
+            Branch::Gas => step >= 0.0,
+        };
+        if !towards || step.abs() <= 2.0 * f64::EPSILON * z {
+            return Some(if towards { next } else { z });
+        }
+        z = next;
+    }
+    None
+}
+
+/// Iteration limit of [`monotone_newton`] (it needs fewer than 10 away from a spinodal).
+const MAX_NEWTON: usize = 40;
+
 /// 2π/3.
 const TWO_PI_3: f64 = 2.0 * std::f64::consts::PI / 3.0;
 
 /// The real roots of a depressed cubic `t³ + p t + q = 0` (with `x = t − a2/3`).
+#[derive(Debug, Clone, Copy)]
 enum Depressed {
     /// One real root `t`.
     One(f64),
