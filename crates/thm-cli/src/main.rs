@@ -1,10 +1,9 @@
 //! The `thm` command-line tool.
 
-// The subcommands arrive with the crates that implement them; until then the enum is empty.
-#![allow(unreachable_code, unused_variables)]
-
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+
+mod eos;
 
 /// Coupled thermo-hydro-mechanical simulation of granular and porous materials.
 #[derive(Debug, Parser)]
@@ -15,9 +14,15 @@ struct Cli {
 }
 
 #[derive(Debug, Subcommand)]
-enum Command {}
+enum Command {
+    /// Equation of state over CSV: reads standard input, writes standard output.
+    #[command(subcommand)]
+    Eos(eos::EosCommand),
+}
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match cli.command {}
+    match cli.command {
+        Command::Eos(command) => eos::run(command),
+    }
 }
