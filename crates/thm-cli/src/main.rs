@@ -3,6 +3,8 @@
 // The subcommands arrive with the crates that implement them; until then the enum is empty.
 #![allow(unreachable_code, unused_variables)]
 
+mod run;
+
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
@@ -15,9 +17,14 @@ struct Cli {
 }
 
 #[derive(Debug, Subcommand)]
-enum Command {}
+enum Command {
+    /// Run a scenario file: histories, ParaView series, checkpoints and a summary.
+    Run(run::RunArgs),
+}
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match cli.command {}
+    match cli.command {
+        Command::Run(args) => run::run(&args),
+    }
 }

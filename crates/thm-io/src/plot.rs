@@ -134,6 +134,8 @@ pub fn render_plot_png(plot: &Plot) -> Result<Vec<u8>, IoError> {
         let mut enc = png::Encoder::new(&mut png_bytes, w, h);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
+        enc.set_compression(png::Compression::Best);
+        enc.set_adaptive_filter(png::AdaptiveFilterType::Adaptive);
         let mut writer = enc.write_header().map_err(|e| err(e.to_string()))?;
         writer
             .write_image_data(&rgb)
