@@ -103,3 +103,6 @@ pub fn run(args: &RunArgs) -> ExitCode {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

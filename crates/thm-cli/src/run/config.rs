@@ -161,7 +161,14 @@ pub fn from_toml<T: DeserializeOwned>(value: toml::Value, prefix: &str) -> Resul
             }
             key.push_str(&inner);
         }
-        let message = e.into_inner().to_string();
+        // toml appends "in `key`" to its messages; the key path is given once, in front.
+        let full = e.into_inner().to_string();
+        let message = full
+            .split("\nin `")
+            .next()
+            .unwrap_or(&full)
+            .trim()
+            .to_string();
         // "missing field `x`" and "unknown field `x`, …" belong to the key `x` itself.
         for (head, what) in [
             ("missing field `", "missing key"),
@@ -178,6 +185,7 @@ pub fn from_toml<T: DeserializeOwned>(value: toml::Value, prefix: &str) -> Resul
                     key.push_str(name);
                 }
                 let allowed = rest[end + 1..].trim_start_matches(',').trim();
+                let allowed = allowed.strip_prefix("in `").map_or(allowed, |_| "");
                 let message = if allowed.is_empty() {
                     what.to_string()
                 } else {

@@ -229,22 +229,23 @@ pub fn drive<S: Scenario>(
     let resuming = opts.resume.is_some();
     let mut row = Vec::with_capacity(columns.len());
 
-    let mut record = |scenario: &S, state: &S::State, step: u64, history: &mut CsvHistory| {
-        row.clear();
-        row.push(time_of(step));
-        scenario.monitor(state, &mut row);
-        if let Some(k) = row.iter().position(|v| !v.is_finite()) {
-            return Err(RunError::Unstable {
-                quantity: columns[k].header(),
-                place: "monitored quantities".into(),
-                step,
-                time: time_of(step),
-                value: row[k],
-            });
-        }
-        history.push(&row)?;
-        Ok(())
-    };
+    // Computes the monitored values and stops on a non-finite one.
+    let observe =
+        |scenario: &S, state: &S::State, step: u64, row: &mut Vec<f64>| -> Result<(), RunError> {
+            row.clear();
+            row.push(time_of(step));
+            scenario.monitor(state, row);
+            if let Some(k) = row.iter().position(|v| !v.is_finite()) {
+                return Err(RunError::Unstable {
+                    quantity: columns[k].header(),
+                    place: "monitored quantities".into(),
+                    step,
+                    time: time_of(step),
+                    value: row[k],
+                });
+            }
+            Ok(())
+        };
     let mut write_frame = |scenario: &mut S, state: &S::State, step: u64| -> Result<(), RunError> {
         let t = time_of(step);
         scenario.frame(state, &mut |name: &str, grid: &UnstructuredGrid<'_>| {
@@ -279,7 +280,8 @@ pub fn drive<S: Scenario>(
     };
 
     if start == 0 {
-        record(&scenario, &state, 0, &mut history)?;
+        observe(&scenario, &state, 0, &mut row)?;
+        history.push(&row)?;
         write_frame(&mut scenario, &state, 0)?;
     }
     let wall = Instant::now();
@@ -290,9 +292,14 @@ pub fn drive<S: Scenario>(
         let last = step == n;
         let checkpoint_due = output.checkpoint_every > 0 && step % output.checkpoint_every == 0;
         let interrupted = opts.interrupt.load(Ordering::Relaxed);
-        if step % output.history_every == 0 || last || checkpoint_due || interrupted {
-            // Also on checkpoint steps, so a non-finite state is never checkpointed.
-            record(&scenario, &state, step, &mut history)?;
+        // Rows follow the schedule only (an interrupted and resumed run writes the same
+        // rows); on checkpoint steps the values are still checked, so a non-finite state is
+        // never checkpointed.
+        if step % output.history_every == 0 || last {
+            observe(&scenario, &state, step, &mut row)?;
+            history.push(&row)?;
+        } else if checkpoint_due || interrupted {
+            observe(&scenario, &state, step, &mut row)?;
         }
         if (output.frame_every > 0 && step % output.frame_every == 0) || last {
             write_frame(&mut scenario, &state, step)?;

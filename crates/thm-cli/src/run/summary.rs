@@ -70,7 +70,7 @@ fn thin<T: Copy>(v: &[T], max: usize) -> Vec<T> {
     let k = v.len().div_ceil(max.max(1)).max(1);
     let mut out: Vec<T> = v.iter().step_by(k).copied().collect();
     if let Some(&last) = v.last()
-        && (v.len() - 1) % k != 0
+        && !(v.len() - 1).is_multiple_of(k)
     {
         out.push(last);
     }
