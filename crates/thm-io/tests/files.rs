@@ -286,3 +286,53 @@ fn plot_renders_a_png_and_its_csv() {
     ));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+mod properties {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+
+        /// Whatever the order frames are added in, the collection lists each (time, part) once,
+        /// in time order, and reads back identical.
+        #[test]
+        fn pvd_is_sorted_and_unique(times in proptest::collection::vec(0u32..50, 1..30)) {
+            let dir = scratch(&format!("pvd-prop-{}", times.len()));
+            let path = dir.join("p.pvd");
+            let mut pvd = PvdCollection::new(&path);
+            for (k, &t) in times.iter().enumerate() {
+                pvd.add(f64::from(t) * 0.1, 0, format!("f{k}.vtu")).unwrap();
+            }
+            let entries = pvd_entries(&path);
+            let mut unique: Vec<u32> = times.clone();
+            unique.sort_unstable();
+            unique.dedup();
+            prop_assert_eq!(entries.len(), unique.len());
+            prop_assert!(entries.windows(2).all(|w| w[0].0 < w[1].0));
+            // The last frame added at a time is the one listed.
+            for (t, f) in &entries {
+                let k = times.iter().rposition(|&x| f64::from(x) * 0.1 == *t).unwrap();
+                prop_assert_eq!(f, &format!("f{k}.vtu"));
+            }
+            let reopened = PvdCollection::open(&path).unwrap();
+            prop_assert_eq!(reopened.frames(), pvd.frames());
+            std::fs::remove_dir_all(&dir).unwrap();
+        }
+
+        /// Any finite f64 (subnormals, extremes, negative zero) survives a checkpoint bit for bit.
+        #[test]
+        fn checkpoint_is_bitwise(bits in proptest::collection::vec(any::<u64>(), 0..64)) {
+            let x: Vec<f64> = bits.iter().map(|&b| f64::from_bits(b)).filter(|v| v.is_finite()).collect();
+            let dir = scratch(&format!("ckpt-prop-{}", bits.len()));
+            let path = dir.join("s.ckpt");
+            save_checkpoint(&path, "p", 1, &x).unwrap();
+            let back: Vec<f64> = load_checkpoint(&path, "p", 1).unwrap();
+            prop_assert_eq!(
+                back.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                x.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+            );
+            std::fs::remove_dir_all(&dir).unwrap();
+        }
+    }
+}
