@@ -17,6 +17,12 @@
 //! Units: files store what the caller gives (SI throughout the workspace); names of fields
 //! and columns should carry the unit (`temperature [K]`, `radius_m`).
 //!
+//! The VTU writer is written here rather than taken from `vtkio` 0.7.0-rc2: vtkio's writer
+//! needs every array copied into its own owned buffer (a 10⁶-particle frame would be copied
+//! before writing), and its reader of raw appended data is compiled out. vtkio serves as the
+//! independent reader in this crate's tests (ASCII and base64 files); raw files are checked to
+//! carry the same bytes as their base64 twins.
+//!
 //! Every file is written to a temporary sibling and renamed into place, so an interrupted
 //! write never destroys a file written before. Numbers in text formats (ASCII VTU, CSV, PVD
 //! times, checkpoints) are written in their shortest exact decimal form and read back to the
