@@ -229,7 +229,9 @@ pub fn drive<S: Scenario>(
     let resuming = opts.resume.is_some();
     let mut row = Vec::with_capacity(columns.len());
 
-    // Computes the monitored values and stops on a non-finite one.
+    // Computes the monitored values and stops on a non-finite one. This is the driver's
+    // backstop, run at every history row and before every checkpoint; a physics checks its own
+    // stages every step and reports the exact place and step.
     let observe =
         |scenario: &S, state: &S::State, step: u64, row: &mut Vec<f64>| -> Result<(), RunError> {
             row.clear();

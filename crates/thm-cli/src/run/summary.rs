@@ -155,7 +155,10 @@ pub fn write_summary<S: Scenario>(
         let _ = writeln!(md, "|---|---|---|---|---|");
         for r in &summary {
             let (reference, err) = match r.reference {
-                Some(x) => (fmt(x), format!("{:.3e}", ((r.measured - x) / x).abs())),
+                Some(x) if x != 0.0 => {
+                    (fmt(x), format!("{:.3e} rel", ((r.measured - x) / x).abs()))
+                }
+                Some(x) => (fmt(x), format!("{:.3e} abs", (r.measured - x).abs())),
                 None => ("–".into(), "–".into()),
             };
             let _ = writeln!(

@@ -346,3 +346,104 @@ fn the_shipped_scenario_runs_and_matches_its_exact_solution() {
     assert!(out.join("particles.pvd").is_file());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A test double whose state grows without bound: the driver must stop at the first
+/// non-finite monitored value, name it with its step, and keep the last good checkpoint.
+mod unstable {
+    use super::*;
+    use crate::run::config::{TimeControl, parse_document};
+    use crate::run::error::ConfigError;
+    use crate::run::scenario::{DriveOptions, FrameSink, Scenario, drive};
+    use crate::run::summary::SummaryRow;
+    use serde::{Deserialize, Serialize};
+    use thm_io::{Column, IoError};
+
+    #[derive(Debug, Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Params {
+        growth: f64,
+    }
+
+    #[derive(Debug)]
+    struct Exploding {
+        growth: f64,
+    }
+
+    impl Scenario for Exploding {
+        const KIND: &'static str = "exploding";
+        const STATE_VERSION: u32 = 1;
+        type Params = Params;
+        type State = f64;
+
+        fn init(p: &Params, _: &TimeControl) -> Result<(Self, f64), ConfigError> {
+            Ok((Self { growth: p.growth }, 1.0))
+        }
+
+        fn step(&mut self, x: &mut f64, _: u64, _: f64) -> Result<(), RunError> {
+            *x *= self.growth;
+            Ok(())
+        }
+
+        fn monitor_columns(&self) -> Vec<Column> {
+            vec![Column::new("x", "m")]
+        }
+
+        fn monitor(&self, x: &f64, values: &mut Vec<f64>) {
+            values.push(*x);
+        }
+
+        fn frame(&mut self, _: &f64, _: &mut FrameSink<'_>) -> Result<(), IoError> {
+            Ok(())
+        }
+
+        fn summary(&self, _: &f64, _: f64) -> Vec<SummaryRow> {
+            Vec::new()
+        }
+    }
+
+    #[test]
+    fn a_run_that_blows_up_stops_naming_quantity_and_step_and_keeps_its_checkpoint() {
+        let dir = scratch("unstable");
+        let doc = parse_document(
+            "kind = \"exploding\"\ngrowth = 1e100\n[time]\nstep = 1\nend = 10\n\
+             [output]\ncheckpoint_every = 2\nhistory_every = 5\n",
+        )
+        .unwrap();
+        let out = dir.join("out");
+        let opts = DriveOptions {
+            out: out.clone(),
+            resume: None,
+            interrupt: &AtomicBool::new(false),
+            progress: Progress::Quiet,
+        };
+        let err = drive::<Exploding>(doc, Path::new("x.toml"), &opts).unwrap_err();
+        // x = 1e100, 1e200, inf: step 3 is not a history step, but it is checked before the
+        // checkpoint of step 4 would be written.
+        match &err {
+            RunError::Unstable {
+                quantity,
+                step,
+                value,
+                ..
+            } => {
+                assert_eq!(quantity, "x [m]");
+                assert_eq!(*step, 4);
+                assert!(value.is_infinite());
+            }
+            other => panic!("{other}"),
+        }
+        assert!(err.to_string().contains("step 4"), "{err}");
+        let kept: f64 = {
+            #[derive(Deserialize)]
+            struct Ckpt {
+                state: f64,
+            }
+            thm_io::load_checkpoint::<Ckpt>(&checkpoint_path(&out, 2), "exploding", 1)
+                .unwrap()
+                .state
+        };
+        assert_eq!(kept, 1e200);
+        assert!(!checkpoint_path(&out, 4).exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
