@@ -2,8 +2,10 @@
 //!
 //! - `cargo xtask verify [--quick] [--case NAME]... [--list]`: runs every registered
 //!   verification case of every crate, prints the table (case, quantity, measured, reference,
-//!   error, tolerance, pass), writes it as Markdown and CSV under `target/verify/`, and exits
-//!   non-zero if any case fails or errors.
+//!   error, tolerance, pass), writes it as Markdown and CSV under `target/verify/`, writes each
+//!   case's plots through `thm-io` as `target/verify/<case>/<plot>.png` and `.csv`, and a
+//!   `report.md` showing each case's plots next to its table rows; exits non-zero if any case
+//!   fails or errors or a plot cannot be drawn.
 //! - `cargo xtask tidy`: checks the architecture invariants of `docs/ARCHITECTURE.md` (also run
 //!   by `cargo test -p xtask`).
 

@@ -1,11 +1,11 @@
 //! `cargo xtask verify`: run the registered cases, print and write the table.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
-use thm_verify::{Case, CaseOutput, ErrorKind, Row};
+use thm_verify::{Case, CaseOutput, ErrorKind, Plot, Row};
 
 /// Every crate registers its own cases; this list only collects them.
 pub fn all_cases() -> Vec<Case> {
@@ -94,6 +94,87 @@ fn csv_field(s: &str) -> String {
     } else {
         s.to_string()
     }
+}
+
+/// A plot written for the report: its title and the PNG/CSV paths relative to the output folder.
+struct WrittenPlot {
+    title: String,
+    png: String,
+    csv: String,
+}
+
+/// Writes each plot of a case as `<out>/<case>/<plot>.png` and `.csv` through `thm-io`.
+fn write_case_plots(out_dir: &Path, case: &str, plots: &[Plot]) -> (Vec<WrittenPlot>, Vec<String>) {
+    let mut written = Vec::new();
+    let mut errors = Vec::new();
+    if plots.is_empty() {
+        return (written, errors);
+    }
+    let dir = out_dir.join(case);
+    if let Err(e) = std::fs::create_dir_all(&dir) {
+        errors.push(format!("cannot create {}: {e}", dir.display()));
+        return (written, errors);
+    }
+    for plot in plots {
+        let png = format!("{case}/{}.png", plot.name);
+        let csv = format!("{case}/{}.csv", plot.name);
+        let result = thm_io::write_plot_png(plot, &out_dir.join(&png))
+            .and_then(|()| thm_io::write_plot_csv(plot, &out_dir.join(&csv)));
+        match result {
+            Ok(()) => written.push(WrittenPlot {
+                title: plot.title.clone(),
+                png,
+                csv,
+            }),
+            Err(e) => errors.push(format!("plot `{}`: {e}", plot.name)),
+        }
+    }
+    (written, errors)
+}
+
+/// `report.md`: for each case, its description, table rows, plots and notes together.
+fn report_md(
+    header: &[&str],
+    table: &[[String; 8]],
+    outcomes: &[Outcome],
+    plots: &[(Vec<WrittenPlot>, Vec<String>)],
+) -> String {
+    let mut md = String::from("# Verification report\n\n");
+    let n_fail = table.iter().filter(|r| r[7] == "FAIL").count();
+    let _ = writeln!(
+        md,
+        "{} cases, {} rows: {} passed, {} failed.\n",
+        outcomes.len(),
+        table.len(),
+        table.len() - n_fail,
+        n_fail
+    );
+    for (o, (written, errors)) in outcomes.iter().zip(plots) {
+        let _ = writeln!(
+            md,
+            "## `{}`\n\n{} ({:.2} s)\n",
+            o.case.name, o.case.description, o.seconds
+        );
+        let _ = writeln!(md, "| {} |", header[1..].join(" | "));
+        let _ = writeln!(md, "|{}", "---|".repeat(header.len() - 1));
+        for row in table.iter().filter(|r| r[0] == o.case.name) {
+            let _ = writeln!(md, "| {} |", row[1..].join(" | ").replace('\n', " "));
+        }
+        md.push('\n');
+        for p in written {
+            let _ = writeln!(md, "![{}]({})\n\n[data]({})\n", p.title, p.png, p.csv);
+        }
+        for e in errors {
+            let _ = writeln!(md, "- **plot error**: {e}");
+        }
+        if let Ok(out) = &o.result {
+            for n in &out.notes {
+                let _ = writeln!(md, "- {n}");
+            }
+        }
+        md.push('\n');
+    }
+    md
 }
 
 pub fn workspace_target() -> PathBuf {
@@ -257,6 +338,22 @@ pub fn run(opts: &Options) -> ExitCode {
     let written = std::fs::create_dir_all(&out_dir)
         .and_then(|_| std::fs::write(out_dir.join("verify.md"), &md))
         .and_then(|_| std::fs::write(out_dir.join("verify.csv"), &csv));
+    // Plots (PNG + CSV per plot) and the report that shows them next to their rows.
+    let plots: Vec<(Vec<WrittenPlot>, Vec<String>)> = outcomes
+        .iter()
+        .map(|o| match &o.result {
+            Ok(out) => write_case_plots(&out_dir, o.case.name, &out.plots),
+            Err(_) => (Vec::new(), Vec::new()),
+        })
+        .collect();
+    for (o, (_, errors)) in outcomes.iter().zip(&plots) {
+        for e in errors {
+            all_pass = false;
+            eprintln!("verify: {}: {e}", o.case.name);
+        }
+    }
+    let report = report_md(&header, &table, &outcomes, &plots);
+    let written = written.and_then(|_| std::fs::write(out_dir.join("report.md"), &report));
     match written {
         Ok(()) => eprintln!("verify: table written to {}", out_dir.display()),
         Err(e) => {
@@ -272,5 +369,83 @@ pub fn run(opts: &Options) -> ExitCode {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use thm_verify::{Series, SeriesRole};
+
+    #[test]
+    fn a_case_plot_is_written_as_non_empty_png_and_csv_and_linked_from_the_report() {
+        let out = std::env::temp_dir().join(format!("xtask-verify-plot-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&out);
+        let x: Vec<f64> = (0..10).map(f64::from).collect();
+        let plot = Plot {
+            name: "line".into(),
+            title: "y = 2x".into(),
+            x_label: "x [m]".into(),
+            y_label: "y [m]".into(),
+            series: vec![
+                Series {
+                    label: "reference".into(),
+                    role: SeriesRole::Reference,
+                    x: x.clone(),
+                    y: x.iter().map(|v| 2.0 * v).collect(),
+                },
+                Series {
+                    label: "measured".into(),
+                    role: SeriesRole::Measured,
+                    x: x.clone(),
+                    y: x.iter().map(|v| 2.0 * v + 0.1).collect(),
+                },
+            ],
+        };
+        let (written, errors) = write_case_plots(&out, "demo/case", std::slice::from_ref(&plot));
+        assert!(errors.is_empty(), "{errors:?}");
+        assert_eq!(written.len(), 1);
+        let png = std::fs::read(out.join(&written[0].png)).unwrap();
+        assert!(
+            png.len() > 1000 && png.starts_with(b"\x89PNG"),
+            "{} bytes",
+            png.len()
+        );
+        let csv = std::fs::read_to_string(out.join(&written[0].csv)).unwrap();
+        assert_eq!(csv.lines().count(), 1 + 2 * x.len());
+
+        fn run_ok() -> Result<CaseOutput, thm_verify::CaseError> {
+            Ok(CaseOutput::default())
+        }
+        let outcome = Outcome {
+            case: Case {
+                name: "demo/case",
+                description: "a demo",
+                quick: true,
+                run: run_ok,
+            },
+            result: Ok(CaseOutput::default()),
+            seconds: 0.0,
+        };
+        let row: [String; 8] =
+            ["demo/case", "y(1)", "m", "2.1", "2", "0.1", "≤ 0.2", "pass"].map(String::from);
+        let md = report_md(
+            &[
+                "case",
+                "quantity",
+                "unit",
+                "measured",
+                "reference",
+                "error",
+                "tolerance",
+                "pass",
+            ],
+            &[row],
+            &[outcome],
+            &[(written, errors)],
+        );
+        assert!(md.contains("![y = 2x](demo/case/line.png)"), "{md}");
+        assert!(md.contains("| y(1) | m | 2.1 |"), "{md}");
+        std::fs::remove_dir_all(&out).unwrap();
     }
 }

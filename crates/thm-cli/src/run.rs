@@ -1,0 +1,108 @@
+//! `thm run FILE.toml [--out DIR] [--resume CHECKPOINT]`: runs a scenario file.
+//!
+//! The file names its `kind`; the common sections are `[time]` (step, end) and `[output]`
+//! (history_every, frame_every, checkpoint_every, encoding); every other section belongs to the
+//! kind. Quantities are numbers in SI units or strings `"value unit"`. Unknown keys, missing
+//! keys, wrong types or units and out-of-range values are errors naming the key path.
+//!
+//! The output folder receives `scenario.toml` (the resolved scenario), `history.csv`, one
+//! `.pvd` + folder of `.vtu` frames per series, `checkpoints/step_*.ckpt` and `summary.md` with
+//! history plots. A fresh run refuses a folder that already holds a run. Ctrl-C stops after the
+//! current step with a checkpoint; `--resume` continues bit for bit from any checkpoint.
+
+pub mod config;
+pub mod error;
+pub mod kinds;
+pub mod scenario;
+pub mod summary;
+pub mod units;
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use error::RunError;
+use scenario::{DriveOptions, Outcome, Progress};
+
+/// Arguments of `thm run`.
+#[derive(Debug, clap::Args)]
+pub struct RunArgs {
+    /// The scenario file (TOML).
+    pub file: PathBuf,
+    /// Output folder (default: `runs/<file stem>`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Continue from this checkpoint (written by an earlier run of the same scenario).
+    #[arg(long)]
+    pub resume: Option<PathBuf>,
+}
+
+/// The default output folder of a scenario file.
+pub fn default_out(file: &Path) -> PathBuf {
+    let stem = file
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "run".into());
+    PathBuf::from("runs").join(stem)
+}
+
+/// Runs a scenario file (the library entry, used by the command and by tests).
+pub fn run_file(
+    file: &Path,
+    out: &Path,
+    resume: Option<&Path>,
+    interrupt: &AtomicBool,
+    progress: Progress,
+) -> Result<Outcome, RunError> {
+    let doc = config::read_document(file)?;
+    let opts = DriveOptions {
+        out: out.to_path_buf(),
+        resume: resume.map(Path::to_path_buf),
+        interrupt,
+        progress,
+    };
+    kinds::dispatch(doc, file, &opts)
+}
+
+/// `thm run`.
+pub fn run(args: &RunArgs) -> ExitCode {
+    let interrupt = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&interrupt);
+    if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed)) {
+        eprintln!("warning: Ctrl-C will not write a checkpoint ({e})");
+    }
+    let out = args.out.clone().unwrap_or_else(|| default_out(&args.file));
+    match run_file(
+        &args.file,
+        &out,
+        args.resume.as_deref(),
+        &interrupt,
+        Progress::Auto,
+    ) {
+        Ok(Outcome::Finished { steps, checkpoint }) => {
+            eprintln!(
+                "finished {steps} steps; results in {} (last checkpoint {})",
+                out.display(),
+                checkpoint.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Ok(Outcome::Interrupted { steps, checkpoint }) => {
+            eprintln!(
+                "interrupted after {steps} steps; continue with: thm run {} --out {} --resume {}",
+                args.file.display(),
+                out.display(),
+                checkpoint.display()
+            );
+            ExitCode::from(130)
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

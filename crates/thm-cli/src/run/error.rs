@@ -1,0 +1,97 @@
+//! Errors of `thm run`.
+
+use std::path::PathBuf;
+
+/// A scenario file value that is missing, unknown, of the wrong type or unit, or out of range.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{key}: {message}")]
+pub struct ConfigError {
+    /// Dotted key path in the TOML file, e.g. `solid.contact.tensile_strength`.
+    pub key: String,
+    /// What is wrong and what is allowed.
+    pub message: String,
+}
+
+impl ConfigError {
+    /// An error at `key`.
+    pub fn new(key: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            key: key.into(),
+            message: message.into(),
+        }
+    }
+}
+
+/// Everything that stops a run.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The scenario file cannot be read.
+    #[error("{path}: cannot read scenario: {source}")]
+    ReadScenario {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The scenario file is not valid TOML.
+    #[error("{path}: not valid TOML: {message}")]
+    Syntax {
+        /// The file.
+        path: PathBuf,
+        /// The parser's message (with line and column).
+        message: String,
+    },
+    /// A value of the scenario file is wrong.
+    #[error("{path}: {error}")]
+    Config {
+        /// The file.
+        path: PathBuf,
+        /// The key path and what is wrong.
+        error: ConfigError,
+    },
+    /// The output folder cannot be created or written.
+    #[error("output folder {path} cannot be written: {source}")]
+    OutputFolder {
+        /// The folder.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The output folder already holds a run, which a fresh run would overwrite.
+    #[error(
+        "output folder {path} already holds a run ({marker}); choose another --out, remove it, or continue it with --resume"
+    )]
+    OutputNotEmpty {
+        /// The folder.
+        path: PathBuf,
+        /// The file that shows a run is there.
+        marker: String,
+    },
+    /// Writing a result file failed.
+    #[error(transparent)]
+    Io(#[from] thm_io::IoError),
+    /// The checkpoint does not belong to this scenario file.
+    #[error(
+        "{path}: checkpoint was written for another scenario ({detail}); resume with the scenario file of that run"
+    )]
+    CheckpointMismatch {
+        /// The checkpoint.
+        path: PathBuf,
+        /// What differs.
+        detail: String,
+    },
+    /// The simulation went unstable: a non-finite or impossible value.
+    #[error("unstable at step {step} (t = {time} s): {quantity} = {value} at {place}")]
+    Unstable {
+        /// The quantity.
+        quantity: String,
+        /// Where (particle, cell, monitor).
+        place: String,
+        /// The step.
+        step: u64,
+        /// The simulated time \[s\].
+        time: f64,
+        /// The offending value.
+        value: f64,
+    },
+}

@@ -1,0 +1,38 @@
+//! The scenario kinds `thm run` knows, dispatched on the file's `kind` key.
+
+pub mod lumped_cooling;
+
+use std::path::Path;
+
+use super::config::ScenarioDocument;
+use super::error::{ConfigError, RunError};
+use super::scenario::{DriveOptions, Outcome, Scenario, drive};
+
+/// The `kind` tags, for error messages.
+pub fn names() -> String {
+    [lumped_cooling::LumpedCooling::KIND]
+        .iter()
+        .map(|k| format!("`{k}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Runs the document with the driver of its kind.
+pub fn dispatch(
+    doc: ScenarioDocument,
+    file: &Path,
+    opts: &DriveOptions<'_>,
+) -> Result<Outcome, RunError> {
+    match doc.common.kind.as_str() {
+        lumped_cooling::LumpedCooling::KIND => {
+            drive::<lumped_cooling::LumpedCooling>(doc, file, opts)
+        }
+        other => Err(RunError::Config {
+            path: file.to_path_buf(),
+            error: ConfigError::new(
+                "kind",
+                format!("unknown scenario kind `{other}`; one of {}", names()),
+            ),
+        }),
+    }
+}

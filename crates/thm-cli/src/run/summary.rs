@@ -1,0 +1,216 @@
+//! `summary.md`: what was run, the figures the scenario monitors, and plots of the histories.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use thm_verify::{Plot, Series, SeriesRole};
+
+use super::config::Common;
+use super::error::RunError;
+use super::scenario::{HISTORY_FILE, SCENARIO_FILE, SUMMARY_FILE, Scenario};
+
+/// A figure of merit: measured at the end of the run, with its reference when one is known.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SummaryRow {
+    /// What is measured.
+    pub quantity: String,
+    /// Its unit.
+    pub unit: String,
+    /// The value at the end of the run.
+    pub measured: f64,
+    /// The analytical or reference value, if any.
+    pub reference: Option<f64>,
+}
+
+/// The facts about the run shown at the top of the summary.
+#[derive(Debug)]
+pub struct RunInfo<'a> {
+    /// The common sections of the scenario.
+    pub common: &'a Common,
+    /// The scenario file.
+    pub file: &'a Path,
+    /// Steps completed.
+    pub steps_done: u64,
+    /// Steps of the whole run.
+    pub n_steps: u64,
+    /// Time step \[s\].
+    pub dt: f64,
+    /// Wall-clock seconds of this invocation.
+    pub wall_seconds: f64,
+    /// The checkpoint written on interruption, if the run was interrupted.
+    pub interrupted: Option<&'a Path>,
+}
+
+/// Reads a history CSV written by the driver: header cells and rows.
+fn read_history(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), RunError> {
+    let text = std::fs::read_to_string(path).map_err(|e| thm_io::IoError::File {
+        path: path.to_path_buf(),
+        action: "read",
+        source: e,
+    })?;
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    let rows = lines
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    Ok((header, rows))
+}
+
+/// Every `k`-th element so that at most `max` remain (always keeping the last).
+fn thin<T: Copy>(v: &[T], max: usize) -> Vec<T> {
+    let k = v.len().div_ceil(max.max(1)).max(1);
+    let mut out: Vec<T> = v.iter().step_by(k).copied().collect();
+    if let Some(&last) = v.last()
+        && !(v.len() - 1).is_multiple_of(k)
+    {
+        out.push(last);
+    }
+    out
+}
+
+fn file_stem(s: &str) -> String {
+    s.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect::<String>()
+        .split('_')
+        .filter(|p| !p.is_empty())
+        .collect::<Vec<_>>()
+        .join("_")
+}
+
+fn fmt(x: f64) -> String {
+    if x != 0.0 && (x.abs() < 1e-3 || x.abs() >= 1e6) {
+        format!("{x:.6e}")
+    } else {
+        format!("{x:.6}")
+    }
+}
+
+/// Writes `summary.md` and one PNG per monitored quantity (measured history against its
+/// reference, when the scenario knows one).
+pub fn write_summary<S: Scenario>(
+    out: &Path,
+    info: &RunInfo<'_>,
+    scenario: &S,
+    state: &S::State,
+) -> Result<(), RunError> {
+    let (header, rows) = read_history(&out.join(HISTORY_FILE))?;
+    let time: Vec<f64> = rows.iter().map(|r| r[0]).collect();
+    let t_end = info.steps_done as f64 * info.dt;
+    let mut md = String::new();
+    let title = info.common.title.as_deref().unwrap_or(&info.common.kind);
+    let _ = writeln!(md, "# {title}\n");
+    let _ = writeln!(
+        md,
+        "- scenario: `{}` (kind `{}`), resolved copy in [`{SCENARIO_FILE}`]({SCENARIO_FILE})",
+        info.file.display(),
+        info.common.kind
+    );
+    let _ = writeln!(
+        md,
+        "- steps: {} of {} (time step {} s), simulated time {} s",
+        info.steps_done,
+        info.n_steps,
+        info.dt,
+        fmt(t_end)
+    );
+    let _ = writeln!(
+        md,
+        "- wall-clock time of this invocation: {:.2} s",
+        info.wall_seconds
+    );
+    match info.interrupted {
+        Some(c) => {
+            let _ = writeln!(
+                md,
+                "- **interrupted**; continue with `--resume {}`",
+                c.display()
+            );
+        }
+        None => {
+            let _ = writeln!(md, "- finished");
+        }
+    }
+    let _ = writeln!(
+        md,
+        "- histories: [`{HISTORY_FILE}`]({HISTORY_FILE}); ParaView series: the `.pvd` files\n"
+    );
+
+    let summary = scenario.summary(state, t_end);
+    if !summary.is_empty() {
+        let _ = writeln!(md, "## Figures at t = {} s\n", fmt(t_end));
+        let _ = writeln!(
+            md,
+            "| quantity | unit | measured | reference | relative error |"
+        );
+        let _ = writeln!(md, "|---|---|---|---|---|");
+        for r in &summary {
+            let (reference, err) = match r.reference {
+                Some(x) if x != 0.0 => {
+                    (fmt(x), format!("{:.3e} rel", ((r.measured - x) / x).abs()))
+                }
+                Some(x) => (fmt(x), format!("{:.3e} abs", (r.measured - x).abs())),
+                None => ("–".into(), "–".into()),
+            };
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {reference} | {err} |",
+                r.quantity,
+                r.unit,
+                fmt(r.measured)
+            );
+        }
+        md.push('\n');
+    }
+
+    let _ = writeln!(md, "## Histories\n");
+    for (k, name) in header.iter().enumerate().skip(1) {
+        let measured: Vec<(f64, f64)> = rows.iter().map(|r| (r[0], r[k])).collect();
+        let measured = thin(&measured, 60);
+        let mut series = vec![Series {
+            label: "measured".into(),
+            role: SeriesRole::Measured,
+            x: measured.iter().map(|p| p.0).collect(),
+            y: measured.iter().map(|p| p.1).collect(),
+        }];
+        let ref_times = thin(&time, 1000);
+        let reference: Vec<(f64, f64)> = ref_times
+            .iter()
+            .filter_map(|&t| scenario.reference(k - 1, t).map(|y| (t, y)))
+            .collect();
+        if !reference.is_empty() {
+            series.insert(
+                0,
+                Series {
+                    label: "analytical".into(),
+                    role: SeriesRole::Reference,
+                    x: reference.iter().map(|p| p.0).collect(),
+                    y: reference.iter().map(|p| p.1).collect(),
+                },
+            );
+        }
+        let plot = Plot {
+            name: format!("history_{}", file_stem(name)),
+            title: format!("{title}: {name}"),
+            x_label: "time [s]".into(),
+            y_label: name.clone(),
+            series,
+        };
+        let png = format!("{}.png", plot.name);
+        thm_io::write_plot_png(&plot, &out.join(&png))?;
+        let _ = writeln!(md, "![{name}]({png})\n");
+    }
+    thm_io::fsutil::write_atomically(&out.join(SUMMARY_FILE), |w| {
+        std::io::Write::write_all(w, md.as_bytes())
+    })?;
+    Ok(())
+}

@@ -1,0 +1,449 @@
+//! `thm run` machinery: resume bit for bit, Ctrl-C checkpoint, and every kind of bad input.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+
+use super::error::RunError;
+use super::run_file;
+use super::scenario::{Outcome, Progress, checkpoint_path};
+
+const SCENARIO: &str = r#"
+kind = "lumped_cooling"
+title = "test"
+
+[time]
+step = "0.25 s"
+end = "25 s"
+
+[output]
+history_every = 3
+frame_every = 25
+checkpoint_every = 30
+encoding = "raw"
+
+[particles]
+lattice = [4, 3]
+spacing = "25 mm"
+radius = "8 mm"
+radius_spread = 0.5
+density = "7850 kg/m^3"
+specific_heat = "460 J/(kg K)"
+initial_temperature = "600 degC"
+
+[fluid]
+temperature = "20 degC"
+heat_transfer_coefficient = "2500 W/(m^2 K)"
+"#;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("thm-run-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn write_scenario(dir: &Path, text: &str) -> PathBuf {
+    let path = dir.join("scenario_in.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn run(file: &Path, out: &Path, resume: Option<&Path>) -> Result<Outcome, RunError> {
+    run_file(file, out, resume, &AtomicBool::new(false), Progress::Quiet)
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let target = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), target).unwrap();
+        }
+    }
+}
+
+fn read(p: &Path) -> Vec<u8> {
+    std::fs::read(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// The files that must agree byte for byte between two runs of the same scenario.
+fn assert_same_results(a: &Path, b: &Path, n: u64) {
+    for rel in [
+        "history.csv".to_string(),
+        "particles.pvd".to_string(),
+        "scenario.toml".to_string(),
+        format!("particles/particles_{n:08}.vtu"),
+        format!("particles/particles_{:08}.vtu", 75),
+    ] {
+        assert!(read(&a.join(&rel)) == read(&b.join(&rel)), "{rel} differs");
+    }
+    assert!(
+        read(&checkpoint_path(a, n)) == read(&checkpoint_path(b, n)),
+        "final checkpoint differs"
+    );
+}
+
+#[test]
+fn resume_from_a_mid_run_checkpoint_is_bitwise_identical() {
+    let dir = scratch("resume");
+    let file = write_scenario(&dir, SCENARIO);
+    let full = dir.join("full");
+    let Outcome::Finished { steps, .. } = run(&file, &full, None).unwrap() else {
+        panic!("not finished")
+    };
+    assert_eq!(steps, 100);
+    // A crashed run: everything the full run wrote (later frames and rows included) is there;
+    // resuming from the checkpoint at step 60 must rewrite the rest identically.
+    let resumed = dir.join("resumed");
+    copy_dir(&full, &resumed);
+    std::fs::remove_file(checkpoint_path(&resumed, 100)).unwrap();
+    std::fs::remove_file(resumed.join("particles/particles_00000100.vtu")).unwrap();
+    let mid = checkpoint_path(&resumed, 60);
+    assert!(matches!(
+        run(&file, &resumed, Some(&mid)).unwrap(),
+        Outcome::Finished { steps: 100, .. }
+    ));
+    assert_same_results(&full, &resumed, 100);
+    // The history has every recorded step exactly once, in time order.
+    let text = std::fs::read_to_string(resumed.join("history.csv")).unwrap();
+    let times: Vec<f64> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert!(times.windows(2).all(|w| w[0] < w[1]), "{times:?}");
+    assert_eq!(times.len(), 1 + 33 + 1); // step 0, every 3rd step to 99, the last step
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn interrupt_writes_a_checkpoint_and_resuming_it_matches_the_uninterrupted_run() {
+    let dir = scratch("interrupt");
+    let file = write_scenario(&dir, SCENARIO);
+    let full = dir.join("full");
+    run(&file, &full, None).unwrap();
+    let cut = dir.join("cut");
+    let outcome = run_file(&file, &cut, None, &AtomicBool::new(true), Progress::Quiet).unwrap();
+    let Outcome::Interrupted { steps, checkpoint } = outcome else {
+        panic!("not interrupted: {outcome:?}")
+    };
+    assert_eq!(steps, 1);
+    assert_eq!(checkpoint, checkpoint_path(&cut, 1));
+    let summary = std::fs::read_to_string(cut.join("summary.md")).unwrap();
+    assert!(summary.contains("--resume"), "{summary}");
+    run(&file, &cut, Some(&checkpoint)).unwrap();
+    assert_same_results(&full, &cut, 100);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Runs `text` (the test scenario with one edit) and returns the error message.
+fn error_of(name: &str, text: &str) -> String {
+    let dir = scratch(name);
+    let file = write_scenario(&dir, text);
+    let err = run(&file, &dir.join("out"), None).unwrap_err().to_string();
+    std::fs::remove_dir_all(&dir).unwrap();
+    err
+}
+
+fn edit(from: &str, to: &str) -> String {
+    assert!(SCENARIO.contains(from), "{from}");
+    SCENARIO.replacen(from, to, 1)
+}
+
+#[test]
+fn bad_scenario_files_name_the_key_path() {
+    let cases: Vec<(&str, String, &str)> = vec![
+        (
+            "unknown_key",
+            edit("radius_spread = 0.5", "radius_sprad = 0.5"),
+            "particles.radius_sprad: unknown key",
+        ),
+        (
+            "unknown_section",
+            edit("[fluid]", "[fluidd]"),
+            "fluidd: unknown key",
+        ),
+        (
+            "unknown_output_key",
+            edit("history_every = 3", "history_evry = 3"),
+            "output.history_evry: unknown key",
+        ),
+        (
+            "missing_key",
+            edit("density = \"7850 kg/m^3\"\n", ""),
+            "particles.density: missing key",
+        ),
+        (
+            "missing_kind",
+            edit("kind = \"lumped_cooling\"", ""),
+            "kind: missing key",
+        ),
+        (
+            "unknown_kind",
+            edit("kind = \"lumped_cooling\"", "kind = \"lumped_coolin\""),
+            "kind: unknown scenario kind `lumped_coolin`",
+        ),
+        (
+            "wrong_type",
+            edit("lattice = [4, 3]", "lattice = \"4 by 3\""),
+            "particles.lattice: invalid type",
+        ),
+        (
+            "wrong_type_count",
+            edit("history_every = 3", "history_every = 2.5"),
+            "output.history_every: invalid type",
+        ),
+        (
+            "wrong_unit",
+            edit("radius = \"8 mm\"", "radius = \"8 MPa\""),
+            "particles.radius: unit `MPa` is not a length",
+        ),
+        (
+            "out_of_range",
+            edit("\"2500 W/(m^2 K)\"", "\"-3 W/(m^2 K)\""),
+            "fluid.heat_transfer_coefficient: must be > 0 W/(m^2 K), got -3 W/(m^2 K)",
+        ),
+        (
+            "out_of_range_temperature",
+            edit(
+                "initial_temperature = \"600 degC\"",
+                "initial_temperature = \"-300 degC\"",
+            ),
+            "particles.initial_temperature: must be > -273.15 degC, got -300 degC",
+        ),
+        (
+            "out_of_range_time",
+            edit("step = \"0.25 s\"", "step = \"-1 ms\""),
+            "time.step: must be > 0 ms, got -1 ms",
+        ),
+        (
+            "zero_history",
+            edit("history_every = 3", "history_every = 0"),
+            "output.history_every: must be ≥ 1 step, got 0",
+        ),
+        (
+            "spread",
+            edit("radius_spread = 0.5", "radius_spread = 1.5"),
+            "particles.radius_spread: must be in [0, 1), got 1.5",
+        ),
+        (
+            "not_a_number",
+            edit("radius_spread = 0.5", "radius_spread = nan"),
+            "particles.radius_spread: must be in [0, 1), got NaN",
+        ),
+        ("syntax", edit("[fluid]", "[fluid"), "not valid TOML"),
+    ];
+    for (name, text, expected) in cases {
+        let err = error_of(name, &text);
+        assert!(err.contains(expected), "{name}: `{err}` lacks `{expected}`");
+        assert!(
+            err.contains("scenario_in.toml"),
+            "{name}: `{err}` lacks the file"
+        );
+    }
+}
+
+#[test]
+fn an_unwritable_output_folder_is_an_error_naming_it() {
+    let dir = scratch("unwritable");
+    let file = write_scenario(&dir, SCENARIO);
+    // A regular file where a folder must be: fails for every user, root included.
+    let blocker = dir.join("blocker");
+    std::fs::write(&blocker, "keep me").unwrap();
+    let out = blocker.join("out");
+    let err = run(&file, &out, None).unwrap_err();
+    assert!(matches!(err, RunError::OutputFolder { .. }), "{err}");
+    assert!(
+        err.to_string().contains(&out.display().to_string()),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_to_string(&blocker).unwrap(), "keep me");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn nothing_already_written_is_lost() {
+    let dir = scratch("keep");
+    let file = write_scenario(&dir, SCENARIO);
+    let out = dir.join("out");
+    run(&file, &out, None).unwrap();
+    let before = read(&out.join("history.csv"));
+    // A fresh run into a folder holding a run is refused, not overwritten.
+    let err = run(&file, &out, None).unwrap_err();
+    assert!(matches!(err, RunError::OutputNotEmpty { .. }), "{err}");
+    assert!(err.to_string().contains(&out.display().to_string()));
+    // Resuming with a scenario whose parameters differ is refused before touching anything.
+    let other = write_scenario(&dir, &edit("\"2500 W/(m^2 K)\"", "\"2000 W/(m^2 K)\""));
+    let err = run(&other, &out, Some(&checkpoint_path(&out, 60))).unwrap_err();
+    assert!(matches!(err, RunError::CheckpointMismatch { .. }), "{err}");
+    // A bad value is reported before the folder is touched.
+    let bad = write_scenario(&dir, &edit("lattice = [4, 3]", "lattice = [0, 3]"));
+    let err = run(&bad, &out, Some(&checkpoint_path(&out, 60))).unwrap_err();
+    assert!(err.to_string().contains("particles.lattice"), "{err}");
+    assert!(read(&out.join("history.csv")) == before);
+    assert!(read(&out.join("scenario.toml")).starts_with(b"kind = \"lumped_cooling\""));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn checkpoint_of_another_kind_or_version_is_refused() {
+    let dir = scratch("ckpt_kind");
+    let file = write_scenario(&dir, SCENARIO);
+    let foreign = dir.join("foreign.ckpt");
+    thm_io::save_checkpoint(&foreign, "dem_tension", 1, &vec![1.0, 2.0]).unwrap();
+    let err = run(&file, &dir.join("out"), Some(&foreign)).unwrap_err();
+    assert!(
+        matches!(err, RunError::Io(thm_io::IoError::CheckpointKind { .. })),
+        "{err}"
+    );
+    thm_io::save_checkpoint(&foreign, "lumped_cooling", 99, &vec![1.0, 2.0]).unwrap();
+    let err = run(&file, &dir.join("out"), Some(&foreign)).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            RunError::Io(thm_io::IoError::CheckpointStateVersion { found: 99, .. })
+        ),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_shipped_scenario_runs_and_matches_its_exact_solution() {
+    let dir = scratch("shipped");
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/lumped_cooling.toml");
+    let out = dir.join("out");
+    run(&file, &out, None).unwrap();
+    // Final row of the history against the closed form (exact step factor: round-off only).
+    let text = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let last: Vec<f64> = text
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|c| c.parse().unwrap())
+        .collect();
+    let (rho, c, h, t0, tf) = (7850.0, 460.0, 25.0, 873.15, 293.15);
+    let t = last[0];
+    assert_eq!(t, 1800.0);
+    // Min temperature: the smallest sphere, r = 6 mm.
+    let tau_small = rho * c * 6e-3 / (3.0 * h);
+    let exact_min = tf + (t0 - tf) * f64::exp(-t / tau_small);
+    assert!(
+        ((last[2] - exact_min) / (exact_min - tf)).abs() < 1e-12,
+        "{} vs {exact_min}",
+        last[2]
+    );
+    // Energy: heat released equals the heat-capacity-weighted temperature drop (monitored) and
+    // is positive and below the total available Σ mᵢ c (T₀ − T∞).
+    assert!(last[4] > 0.0);
+    let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(summary.contains("history_mean_temperature_K.png"));
+    assert!(out.join("history_mean_temperature_K.png").is_file());
+    assert!(out.join("particles.pvd").is_file());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A test double whose state grows without bound: the driver must stop at the first
+/// non-finite monitored value, name it with its step, and keep the last good checkpoint.
+mod unstable {
+    use super::*;
+    use crate::run::config::{TimeControl, parse_document};
+    use crate::run::error::ConfigError;
+    use crate::run::scenario::{DriveOptions, FrameSink, Scenario, drive};
+    use crate::run::summary::SummaryRow;
+    use serde::{Deserialize, Serialize};
+    use thm_io::{Column, IoError};
+
+    #[derive(Debug, Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Params {
+        growth: f64,
+    }
+
+    #[derive(Debug)]
+    struct Exploding {
+        growth: f64,
+    }
+
+    impl Scenario for Exploding {
+        const KIND: &'static str = "exploding";
+        const STATE_VERSION: u32 = 1;
+        type Params = Params;
+        type State = f64;
+
+        fn init(p: &Params, _: &TimeControl) -> Result<(Self, f64), ConfigError> {
+            Ok((Self { growth: p.growth }, 1.0))
+        }
+
+        fn step(&mut self, x: &mut f64, _: u64, _: f64) -> Result<(), RunError> {
+            *x *= self.growth;
+            Ok(())
+        }
+
+        fn monitor_columns(&self) -> Vec<Column> {
+            vec![Column::new("x", "m")]
+        }
+
+        fn monitor(&self, x: &f64, values: &mut Vec<f64>) {
+            values.push(*x);
+        }
+
+        fn frame(&mut self, _: &f64, _: &mut FrameSink<'_>) -> Result<(), IoError> {
+            Ok(())
+        }
+
+        fn summary(&self, _: &f64, _: f64) -> Vec<SummaryRow> {
+            Vec::new()
+        }
+    }
+
+    #[test]
+    fn a_run_that_blows_up_stops_naming_quantity_and_step_and_keeps_its_checkpoint() {
+        let dir = scratch("unstable");
+        let doc = parse_document(
+            "kind = \"exploding\"\ngrowth = 1e100\n[time]\nstep = 1\nend = 10\n\
+             [output]\ncheckpoint_every = 2\nhistory_every = 5\n",
+        )
+        .unwrap();
+        let out = dir.join("out");
+        let opts = DriveOptions {
+            out: out.clone(),
+            resume: None,
+            interrupt: &AtomicBool::new(false),
+            progress: Progress::Quiet,
+        };
+        let err = drive::<Exploding>(doc, Path::new("x.toml"), &opts).unwrap_err();
+        // x = 1e100, 1e200, inf: step 3 is not a history step, but it is checked before the
+        // checkpoint of step 4 would be written.
+        match &err {
+            RunError::Unstable {
+                quantity,
+                step,
+                value,
+                ..
+            } => {
+                assert_eq!(quantity, "x [m]");
+                assert_eq!(*step, 4);
+                assert!(value.is_infinite());
+            }
+            other => panic!("{other}"),
+        }
+        assert!(err.to_string().contains("step 4"), "{err}");
+        let kept: f64 = {
+            #[derive(Deserialize)]
+            struct Ckpt {
+                state: f64,
+            }
+            thm_io::load_checkpoint::<Ckpt>(&checkpoint_path(&out, 2), "exploding", 1)
+                .unwrap()
+                .state
+        };
+        assert_eq!(kept, 1e200);
+        assert!(!checkpoint_path(&out, 4).exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
