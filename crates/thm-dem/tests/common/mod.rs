@@ -36,6 +36,7 @@ pub fn jittered_lattice(
     ny: usize,
     nz: usize,
     seed: u64,
+    speed: f64,
 ) -> ParticleState {
     use rand::{Rng, SeedableRng};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
@@ -63,12 +64,12 @@ pub fn jittered_lattice(
     let mut p = ParticleState::new(kin, 2600.0, 293.15, &c, &r).unwrap();
     for v in p.velocity.iter_mut() {
         *v = Vec3::new(
-            rng.random_range(-0.01..0.01),
-            rng.random_range(-0.01..0.01),
+            rng.random_range(-speed..speed),
+            rng.random_range(-speed..speed),
             if kin.is_planar() {
                 0.0
             } else {
-                rng.random_range(-0.01..0.01)
+                rng.random_range(-speed..speed)
             },
         );
     }
