@@ -7,6 +7,7 @@
 pub mod contact;
 pub mod error;
 pub mod neighbour;
+pub mod packing;
 pub mod state;
 pub mod stepper;
 pub mod vec3;
