@@ -19,10 +19,22 @@
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+mod error;
 mod mesh;
+pub mod mesher;
+pub mod motion;
 
+pub use error::MeshError;
 pub use mesh::{
     BoundarySide, CellKind, ChannelKind, Channels, FaceKind, NONE, PoreMesh, TopologyError,
+};
+pub use mesher::{
+    Chords, Circle, Contact, MeshParams, MeshSettings, Outline, PackingMesh, S2sApertureParams,
+    mesh_packing,
+};
+pub use motion::{
+    CircleMotion, MeshMotion, RemeshCriteria, RemeshCriteriaParams, RemeshReason, VertexAnchors,
+    VertexConstraint, remesh_needed,
 };
 
 pub mod verification {
