@@ -23,6 +23,8 @@ mod error;
 mod mesh;
 pub mod mesher;
 pub mod motion;
+pub mod packing;
+pub mod remap;
 
 pub use error::MeshError;
 pub use mesh::{
@@ -36,6 +38,7 @@ pub use motion::{
     CircleMotion, MeshMotion, RemeshCriteria, RemeshCriteriaParams, RemeshReason, VertexAnchors,
     VertexConstraint, remesh_needed,
 };
+pub use remap::{CellFilter, RemapOperator};
 
 pub mod verification {
     //! Verification cases of this crate, collected by `cargo xtask verify`.

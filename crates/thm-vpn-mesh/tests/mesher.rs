@@ -50,3 +50,31 @@ fn two_overlapping_circles_in_a_box() {
         assert!(((got - exact) / exact).abs() < 5e-3);
     }
 }
+
+#[test]
+fn paper_bar_packing() {
+    let spec = thm_vpn_mesh::packing::PackingSpec::paper_bar(1);
+    let cs = thm_vpn_mesh::packing::random_packing(&spec);
+    let ct = thm_vpn_mesh::packing::overlap_contacts(&cs, 1e7);
+    let u = thm_vpn_mesh::packing::union_area(&cs);
+    println!("n {} porosity exact {}", cs.len(), 1.0 - u / 1.6e-3);
+    for n in [16u32, 32, 64, 128] {
+        let pm = mesh_packing(&cs, &ct, &box_params([0.0, 0.0], [0.02, 0.08], n)).unwrap();
+        let m = &pm.mesh;
+        let s2s = m
+            .channels
+            .kind
+            .iter()
+            .filter(|k| **k == ChannelKind::S2S)
+            .count();
+        println!(
+            "n {n}: cells {} fluid area {} solid {} err {} s2s {} of {} contacts",
+            m.n_cells(),
+            m.fluid_area() / 1.6e-3,
+            m.solid_area(),
+            (m.solid_area() - u) / u,
+            s2s,
+            ct.len()
+        );
+    }
+}
