@@ -105,10 +105,10 @@ proptest! {
                     prop_assert!(pu / e_union.max(1e-300) > 3.0, "union error ratio {}", pu / e_union);
                 }
                 for (a, b) in pc.iter().zip(&e_circ) {
-                    if let (Some(a), Some(b)) = (a, b) {
-                        if *a > 1e-10 {
-                            prop_assert!(a / b.max(1e-300) > 3.0, "circle error ratio {}", a / b);
-                        }
+                    if let (Some(a), Some(b)) = (a, b)
+                        && *a > 1e-10
+                    {
+                        prop_assert!(a / b.max(1e-300) > 3.0, "circle error ratio {}", a / b);
                     }
                 }
             }
