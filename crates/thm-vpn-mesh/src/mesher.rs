@@ -119,7 +119,8 @@ pub struct MeshParams {
     pub t2t_reduction_factor: f64,
     /// S2S aperture law A-Eq. 8.
     pub s2s: S2sApertureParams,
-    /// Vertices closer than `snap_tolerance × (mean radius)` are merged [-] (default 1e-9).
+    /// Vertices closer than `snap_tolerance × (mean radius)` are merged, and
+    /// vertices that close to a box side are put on it [-] (default 1e-6).
     pub snap_tolerance: f64,
 }
 
@@ -132,7 +133,7 @@ impl MeshParams {
             thickness: None,
             t2t_reduction_factor: 0.0115,
             s2s: S2sApertureParams::default(),
-            snap_tolerance: 1e-9,
+            snap_tolerance: 1e-6,
         }
     }
 
@@ -912,7 +913,12 @@ fn circumradius(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 }
 
 /// Anchors of every vertex from the keys merged into it.
-fn anchors_from_keys(keys: &[Vec<VKey>], pos: &[[f64; 2]], circles: &[Circle]) -> VertexAnchors {
+fn anchors_from_keys(
+    keys: &[Vec<VKey>],
+    pos: &[[f64; 2]],
+    circles: &[Circle],
+    bx: Option<[f64; 4]>,
+) -> VertexAnchors {
     let mut anchors = VertexAnchors::default();
     for (v, ks) in keys.iter().enumerate() {
         let mut list: Vec<u32> = Vec::with_capacity(3);
@@ -947,6 +953,19 @@ fn anchors_from_keys(keys: &[Vec<VKey>], pos: &[[f64; 2]], circles: &[Circle]) -
         }
         if list.is_empty() {
             constraint = VertexConstraint::Fixed;
+        }
+        // Any vertex exactly on a box side (e.g. the grid point of a circle touching it)
+        // stays on it.
+        if let Some(b) = bx {
+            let on: Vec<u8> = (0..4u8)
+                .filter(|&s| pos[v][usize::from(s >= 2)] == b[s as usize])
+                .collect();
+            constraint = match (on.len(), constraint) {
+                (0, c) => c,
+                (1, VertexConstraint::Free) => VertexConstraint::OnSide(on[0]),
+                (1, VertexConstraint::OnSide(s)) if s == on[0] => VertexConstraint::OnSide(s),
+                _ => VertexConstraint::Fixed,
+            };
         }
         anchors.push(pos[v], &list, constraint, circles);
     }
@@ -1055,20 +1074,30 @@ pub fn mesh_packing(
             });
         }
     }
+    let mean_r = if nc > 0 {
+        circles.iter().map(|c| c.radius).sum::<f64>() / nc as f64
+    } else {
+        1.0
+    };
+    let snap = prm.snap_tolerance * mean_r;
     for p in points.iter_mut() {
         for x in p.iter_mut() {
             if x.abs() < 1e-40 {
                 *x = 0.0;
             }
         }
+        // Points within the snap distance of a box side go onto it (circles touching a side).
+        if let Some(b) = bx {
+            for (s, &side) in b.iter().enumerate() {
+                let k = usize::from(s >= 2);
+                if (p[k] - side).abs() <= snap {
+                    p[k] = side;
+                }
+            }
+        }
     }
 
     // Stage 4: snapping.
-    let mean_r = if nc > 0 {
-        circles.iter().map(|c| c.radius).sum::<f64>() / nc as f64
-    } else {
-        1.0
-    };
     let rep = snap_vertices(&points, prm.snap_tolerance * mean_r);
     let mut new_id = vec![NONE; points.len()];
     let mut vpos: Vec<[f64; 2]> = Vec::new();
@@ -1261,7 +1290,7 @@ pub fn mesh_packing(
             *v = used[*v as usize];
         }
     }
-    let anchors = anchors_from_keys(&used_keys, &vertices, circles);
+    let anchors = anchors_from_keys(&used_keys, &vertices, circles, bx);
     let vertex_sphere: Vec<u32> = used_keys
         .iter()
         .map(|ks| {

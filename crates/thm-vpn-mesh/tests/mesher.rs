@@ -51,30 +51,39 @@ fn two_overlapping_circles_in_a_box() {
     }
 }
 
+/// Convergence table on the paper's bar: the meshed solid area against the exact area of the
+/// union of the discs, and the worst circle against its exact cut area; doubling the boundary
+/// resolution divides both errors by ≈ 4 (second order). Run with `--nocapture` for the table.
 #[test]
-fn paper_bar_packing() {
-    let spec = thm_vpn_mesh::packing::PackingSpec::paper_bar(1);
-    let cs = thm_vpn_mesh::packing::random_packing(&spec);
-    let ct = thm_vpn_mesh::packing::overlap_contacts(&cs, 1e7);
-    let u = thm_vpn_mesh::packing::union_area(&cs);
-    println!("n {} porosity exact {}", cs.len(), 1.0 - u / 1.6e-3);
+fn bar_solid_area_converges_at_second_order() {
+    use thm_vpn_mesh::packing::{
+        PackingSpec, cut_circle_area, overlap_contacts, random_packing, union_area,
+    };
+    let spec = PackingSpec::paper_bar(1);
+    let cs = random_packing(&spec);
+    let ct = overlap_contacts(&cs, 1e7);
+    let u = union_area(&cs);
+    let mut prev: Option<(f64, f64)> = None;
+    println!(
+        "segments | cells | solid-area rel. error | ratio | worst cut circle rel. error | ratio"
+    );
     for n in [16u32, 32, 64, 128] {
-        let pm = mesh_packing(&cs, &ct, &box_params([0.0, 0.0], [0.02, 0.08], n)).unwrap();
-        let m = &pm.mesh;
-        let s2s = m
-            .channels
-            .kind
-            .iter()
-            .filter(|k| **k == ChannelKind::S2S)
-            .count();
+        let pm = mesh_packing(&cs, &ct, &box_params(spec.box_min, spec.box_max, n)).unwrap();
+        let e_u = (pm.mesh.solid_area() - u).abs() / u;
+        let e_c = (0..cs.len())
+            .filter_map(|i| {
+                cut_circle_area(&cs, i).map(|a| (pm.circle_solid_area(i) - a).abs() / a)
+            })
+            .fold(0.0, f64::max);
+        let (ru, rc) = prev.map_or((f64::NAN, f64::NAN), |(pu, pc)| (pu / e_u, pc / e_c));
         println!(
-            "n {n}: cells {} fluid area {} solid {} err {} s2s {} of {} contacts",
-            m.n_cells(),
-            m.fluid_area() / 1.6e-3,
-            m.solid_area(),
-            (m.solid_area() - u) / u,
-            s2s,
-            ct.len()
+            "{n:8} | {:5} | {e_u:.3e} | {ru:.2} | {e_c:.3e} | {rc:.2}",
+            pm.mesh.n_cells()
         );
+        if prev.is_some() {
+            assert!(ru > 3.5 && ru < 4.5, "union error ratio {ru}");
+            assert!(rc > 3.5 && rc < 4.5, "circle error ratio {rc}");
+        }
+        prev = Some((e_u, e_c));
     }
 }
