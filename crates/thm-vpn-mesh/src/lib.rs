@@ -40,12 +40,4 @@ pub use motion::{
 };
 pub use remap::{CellFilter, RemapOperator};
 
-pub mod verification {
-    //! Verification cases of this crate, collected by `cargo xtask verify`.
-    use thm_verify::Case;
-
-    /// All verification cases of this crate.
-    pub fn cases() -> Vec<Case> {
-        Vec::new()
-    }
-}
+pub mod verification;

@@ -87,3 +87,20 @@ fn bar_solid_area_converges_at_second_order() {
         prev = Some((e_u, e_c));
     }
 }
+
+#[test]
+fn verification_cases_pass() {
+    for case in thm_vpn_mesh::verification::cases() {
+        let out = (case.run)().unwrap();
+        for r in &out.rows {
+            println!(
+                "{:60} {:.6e} vs {:.6e} err {:.2e} tol {:.2e} {}",
+                r.quantity, r.measured, r.reference, r.error, r.tolerance, r.pass
+            );
+        }
+        for n in &out.notes {
+            println!("note: {n}");
+        }
+        assert!(out.passed(), "{}", case.name);
+    }
+}
