@@ -20,6 +20,7 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 mod error;
+pub mod export;
 mod mesh;
 pub mod mesher;
 pub mod motion;

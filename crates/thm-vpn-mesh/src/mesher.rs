@@ -278,6 +278,8 @@ enum VKey {
     Corner(u8, u8),
     /// A vertex of the bounding square (never part of the mesh in practice).
     Unique(u32),
+    /// Centre of circle `i` (a Steiner point that makes the solid cells wedges).
+    Centre(u32),
 }
 
 /// A line bounding a power cell.
@@ -565,7 +567,7 @@ fn key_position(key: VKey, circles: &[Circle], bx: &[f64; 4], fallback: [f64; 2]
             }
         }
         VKey::Corner(s1, s2) => [side_val(s1), side_val(s2)],
-        VKey::Arc(..) | VKey::Unique(..) => fallback,
+        VKey::Arc(..) | VKey::Unique(..) | VKey::Centre(..) => fallback,
     }
 }
 
@@ -925,7 +927,7 @@ fn anchors_from_keys(
         let mut constraint = VertexConstraint::Free;
         for k in ks {
             let (circ, con): (&[u32], VertexConstraint) = match *k {
-                VKey::Arc(i, _) => (&[i], VertexConstraint::Free),
+                VKey::Arc(i, _) | VKey::Centre(i) => (&[i], VertexConstraint::Free),
                 VKey::CircleCircle(a, b, _) => (&[a, b], VertexConstraint::Free),
                 VKey::Radical(a, b, c) => (&[a, b, c], VertexConstraint::Free),
                 VKey::PairSide(a, b, s) => (&[a, b], VertexConstraint::OnSide(s)),
@@ -1063,6 +1065,21 @@ pub fn mesh_packing(
             poly_out.push(v.out);
         }
         poly_start.push(poly_verts.len() as u32);
+        // The centre, when well inside the polygon, splits the solid into wedges.
+        if !poly.verts.is_empty() {
+            let c = &circles[i];
+            let m = poly.verts.len();
+            let clear = (0..m).all(|k| {
+                let (a, b) = (poly.verts[k].p, poly.verts[(k + 1) % m].p);
+                let e = sub(b, a);
+                let len = dot(e, e).sqrt();
+                len > 0.0 && cross(e, sub(c.centre, a)) >= 0.25 * c.radius * len
+            });
+            if clear {
+                points.push(c.centre);
+                keys.push(VKey::Centre(i as u32));
+            }
+        }
     }
     if let Some(b) = bx {
         for (s1, s2) in [(0u8, 2u8), (1, 2), (1, 3), (0, 3)] {

@@ -56,15 +56,19 @@ impl PackingSpec {
 /// Exact area of the union of discs (Green's theorem over the uncovered arcs).
 pub fn union_area(circles: &[Circle]) -> f64 {
     use std::f64::consts::TAU;
+    let pairs = crate::mesher::overlapping_pairs(circles);
+    let mut nb: Vec<Vec<u32>> = vec![Vec::new(); circles.len()];
+    for [a, b] in pairs {
+        nb[a as usize].push(b);
+        nb[b as usize].push(a);
+    }
     let mut total = 0.0;
     let mut intervals: Vec<(f64, f64)> = Vec::new();
     for (i, ci) in circles.iter().enumerate() {
         intervals.clear();
         let mut covered = false;
-        for (j, cj) in circles.iter().enumerate() {
-            if i == j {
-                continue;
-            }
+        for &j in &nb[i] {
+            let (j, cj) = (j as usize, &circles[j as usize]);
             let e = [cj.centre[0] - ci.centre[0], cj.centre[1] - ci.centre[1]];
             let d = (e[0] * e[0] + e[1] * e[1]).sqrt();
             let (ri, rj) = (ci.radius, cj.radius);

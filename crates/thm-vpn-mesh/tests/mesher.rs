@@ -104,3 +104,30 @@ fn verification_cases_pass() {
         assert!(out.passed(), "{}", case.name);
     }
 }
+
+/// The exported arrays describe the same mesh, and the interface and contact faces are the
+/// faces between a fluid and a solid cell and between two spheres.
+#[test]
+fn export_arrays_and_face_sets() {
+    let cs = [circle(0.4, 0.5, 0.2, 7), circle(0.65, 0.5, 0.1, 9)];
+    let pm = mesh_packing(&cs, &[], &box_params([0.0, 0.0], [1.0, 1.0], 32)).unwrap();
+    let m = &pm.mesh;
+    let tris = m.triangles_usize();
+    let types = m.cell_type_labels();
+    let owners = m.cell_owner_labels();
+    assert_eq!(tris.len(), m.n_cells());
+    for c in 0..m.n_cells() {
+        assert_eq!(types[c] == 0, m.cell_kind[c].is_fluid());
+        assert_eq!(owners[c] == -1, m.cell_kind[c].is_fluid());
+        assert!(owners[c] == -1 || owners[c] == 7 || owners[c] == 9);
+    }
+    // The contact faces form the cut: their total length is the chord length.
+    let chord: f64 = m.contact_faces().map(|f| m.face_length[f]).sum();
+    let d = 0.25f64;
+    let a = (d * d + 0.04 - 0.01) / (2.0 * d);
+    let exact = 2.0 * (0.04 - a * a).sqrt();
+    assert!((chord - exact).abs() < 1e-14, "{chord} vs {exact}");
+    // Interface faces: the polygon outlines minus the cut, a closed loop around the pair.
+    let perimeter: f64 = m.fluid_solid_faces().map(|f| m.face_length[f]).sum();
+    assert!(perimeter > 0.0 && perimeter < std::f64::consts::TAU * 0.3);
+}
