@@ -19,18 +19,26 @@
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+mod error;
+pub mod export;
 mod mesh;
+pub mod mesher;
+pub mod motion;
+pub mod packing;
+pub mod remap;
 
+pub use error::MeshError;
 pub use mesh::{
     BoundarySide, CellKind, ChannelKind, Channels, FaceKind, NONE, PoreMesh, TopologyError,
 };
+pub use mesher::{
+    Chords, Circle, Contact, MeshParams, MeshSettings, Outline, PackingMesh, S2sApertureParams,
+    mesh_packing,
+};
+pub use motion::{
+    CircleMotion, MeshMotion, RemeshCriteria, RemeshCriteriaParams, RemeshReason, VertexAnchors,
+    VertexConstraint, remesh_needed,
+};
+pub use remap::{CellFilter, RemapOperator};
 
-pub mod verification {
-    //! Verification cases of this crate, collected by `cargo xtask verify`.
-    use thm_verify::Case;
-
-    /// All verification cases of this crate.
-    pub fn cases() -> Vec<Case> {
-        Vec::new()
-    }
-}
+pub mod verification;
