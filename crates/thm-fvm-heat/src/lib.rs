@@ -1,16 +1,22 @@
 //! # thm-fvm-heat
 //!
-//! See `Cargo.toml` for the crate's role; the full module documentation (equations by paper
-//! and number, units, validity range, public seam) arrives with the crate's implementation.
+//! (module documentation: see the end of the work; written below)
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
-pub mod verification {
-    //! Verification cases of this crate, collected by `cargo xtask verify`.
-    use thm_verify::Case;
+mod error;
+pub mod params;
+pub mod properties;
+pub mod spheres;
+mod state;
+pub mod stepper;
+pub mod verification;
 
-    /// All verification cases of this crate.
-    pub fn cases() -> Vec<Case> {
-        Vec::new()
-    }
-}
+pub use error::HeatError;
+pub use params::{
+    BoundaryCondition, BoundaryParams, GradientScheme, HeatModel, HeatParams, PhaseParams,
+    SolidParams, TemperatureSchedule,
+};
+pub use spheres::sphere_mean_temperatures;
+pub use state::{FlowInput, HeatState};
+pub use stepper::{HeatStepper, StepReport};
