@@ -22,13 +22,21 @@ pub enum Side {
 }
 
 /// A set of grid nodes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum NodeSet {
     /// The nodes on one side of the grid.
     Side(Side),
     /// Every node (e.g. `v_y = 0` everywhere for a 1D problem).
     All,
+    /// The nodes whose positions lie in the closed rectangle `[lower, upper]` (m), e.g. a
+    /// grid line inside a padded grid.
+    Region {
+        /// Lower-left corner (m).
+        lower: [f64; 2],
+        /// Upper-right corner (m).
+        upper: [f64; 2],
+    },
 }
 
 impl NodeSet {
@@ -41,6 +49,10 @@ impl NodeSet {
             NodeSet::Side(Side::Right) => i + 1 == nx,
             NodeSet::Side(Side::Bottom) => j == 0,
             NodeSet::Side(Side::Top) => j + 1 == ny,
+            NodeSet::Region { lower, upper } => {
+                let x = grid.node_position(i, j);
+                x[0] >= lower[0] && x[0] <= upper[0] && x[1] >= lower[1] && x[1] <= upper[1]
+            }
         }
     }
 }
@@ -92,7 +104,10 @@ impl SurfaceLoad {
     /// True when the point centre `x` lies in the layer.
     #[inline]
     pub fn contains(&self, x: [f64; 2]) -> bool {
-        x[0] >= self.lower[0] && x[0] <= self.upper[0] && x[1] >= self.lower[1] && x[1] <= self.upper[1]
+        x[0] >= self.lower[0]
+            && x[0] <= self.upper[0]
+            && x[1] >= self.lower[1]
+            && x[1] <= self.upper[1]
     }
 }
 
@@ -128,7 +143,7 @@ impl RigidWall {
             });
         }
         self.normal = [self.normal[0] / n, self.normal[1] / n];
-        if !(self.friction >= 0.0) {
+        if self.friction.is_nan() || self.friction < 0.0 {
             return Err(MpmError::InvalidParameter {
                 name: format!("walls[{k}].friction"),
                 value: self.friction,

@@ -10,11 +10,14 @@ pub mod error;
 pub mod grid;
 pub mod material;
 pub mod points;
+pub mod reference;
 pub mod shape;
 pub mod stepper;
 pub mod verification;
 
-pub use boundary::{NodeSet, RigidWall, Side, SurfaceLoad, TemperatureCondition, VelocityCondition};
+pub use boundary::{
+    NodeSet, RigidWall, Side, SurfaceLoad, TemperatureCondition, VelocityCondition,
+};
 pub use config::{MpmConfig, MpmParameters};
 pub use error::MpmError;
 pub use grid::{Grid, GridParameters};

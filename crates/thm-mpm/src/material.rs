@@ -97,8 +97,7 @@ pub struct LinearThermoElastic {
 
 /// Checks that a conductivity tensor is finite, symmetric positive semi-definite.
 pub fn validate_conductivity(name: &str, k: Sym2) -> Result<(), MpmError> {
-    if !(k.iter().all(|v| v.is_finite()) && k[0] >= 0.0 && k[1] >= 0.0)
-        || k[0] * k[1] < k[2] * k[2]
+    if !(k.iter().all(|v| v.is_finite()) && k[0] >= 0.0 && k[1] >= 0.0) || k[0] * k[1] < k[2] * k[2]
     {
         return Err(MpmError::InvalidParameter {
             name: name.into(),

@@ -62,6 +62,40 @@ pub struct PointProperties {
     pub velocity: [f64; 2],
 }
 
+impl PointProperties {
+    /// Checks the properties, naming the offending one.
+    pub fn validate(&self) -> Result<(), MpmError> {
+        let pos = |name: &str, v: f64, allowed: &'static str| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(MpmError::InvalidParameter {
+                    name: name.into(),
+                    value: v,
+                    allowed,
+                })
+            }
+        };
+        pos("density", self.density, "(0, inf) kg/m^3")?;
+        pos("specific_heat", self.specific_heat, "(0, inf) J/(kg K)")?;
+        crate::material::validate_conductivity("conductivity", self.conductivity)?;
+        for (name, v) in [
+            ("temperature", self.temperature),
+            ("velocity[0]", self.velocity[0]),
+            ("velocity[1]", self.velocity[1]),
+        ] {
+            if !v.is_finite() {
+                return Err(MpmError::InvalidParameter {
+                    name: name.into(),
+                    value: v,
+                    allowed: "finite",
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
 impl MaterialPoints {
     /// An empty set.
     pub fn new() -> Self {
@@ -119,7 +153,8 @@ impl MaterialPoints {
 
     /// Fills the rectangle `[lower, upper]` with `per_cell × per_cell` points in each grid
     /// cell it covers (the rectangle should be aligned with grid lines), each carrying the
-    /// domain `l_e/per_cell` square.
+    /// domain `l_e/per_cell` square. Errors on invalid properties (non-positive density or
+    /// heat capacity, negative or asymmetric conductivity, non-finite values).
     pub fn fill_rectangle(
         &mut self,
         grid: &Grid,
@@ -127,8 +162,16 @@ impl MaterialPoints {
         upper: [f64; 2],
         per_cell: usize,
         props: &PointProperties,
-    ) {
-        let n = per_cell.max(1);
+    ) -> Result<(), MpmError> {
+        props.validate()?;
+        if per_cell == 0 {
+            return Err(MpmError::InvalidParameter {
+                name: "per_cell".into(),
+                value: 0.0,
+                allowed: "[1, inf)",
+            });
+        }
+        let n = per_cell;
         let dx = grid.cell_size() / n as f64;
         let nx = ((upper[0] - lower[0]) / dx).round().max(0.0) as usize;
         let ny = ((upper[1] - lower[1]) / dx).round().max(0.0) as usize;
@@ -142,6 +185,7 @@ impl MaterialPoints {
                 self.push(p, half, props);
             }
         }
+        Ok(())
     }
 
     /// Checks that all arrays have the same length and that every point has positive mass,
@@ -196,8 +240,8 @@ impl MaterialPoints {
                 return bad("initial_volume", v0, "(0, inf) m^3");
             }
             let c = self.specific_heat[p];
-            if !(c.is_finite() && c >= 0.0) {
-                return bad("specific_heat", c, "[0, inf) J/(kg K)");
+            if !(c.is_finite() && c > 0.0) {
+                return bad("specific_heat", c, "(0, inf) J/(kg K)");
             }
             for k in 0..2 {
                 let l = self.half_size[p][k];

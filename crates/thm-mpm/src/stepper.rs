@@ -387,7 +387,8 @@ impl Mpm {
         let gravity = params.gravity;
         let loads = &params.surface_loads;
         let stencils = &self.stencils;
-        self.empty_node_mass = EMPTY_NODE_FRACTION * points.mass.iter().fold(0.0, |a: f64, &m| a.max(m));
+        self.empty_node_mass =
+            EMPTY_NODE_FRACTION * points.mass.iter().fold(0.0, |a: f64, &m| a.max(m));
 
         // Pass 1.
         Self::scatter(
@@ -689,8 +690,11 @@ impl Mpm {
         let bad = (0..n).into_par_iter().with_min_len(4096).find_first(|&i| {
             let x = points.position[i];
             let v = points.velocity[i];
-            !(x[0].is_finite() && x[1].is_finite() && v[0].is_finite() && v[1].is_finite())
-                || !points.temperature[i].is_finite()
+            !(x[0].is_finite()
+                && x[1].is_finite()
+                && v[0].is_finite()
+                && v[1].is_finite()
+                && points.temperature[i].is_finite())
         });
         if let Some(i) = bad {
             return Err(MpmError::NonFinite {
@@ -802,8 +806,7 @@ impl Mpm {
                 },
             )
             .min_by_key(|e| match e {
-                MpmError::InvalidPoint { index, .. }
-                | MpmError::NonFinite { index, .. } => *index,
+                MpmError::InvalidPoint { index, .. } | MpmError::NonFinite { index, .. } => *index,
                 MpmError::Material { point, .. } => *point,
                 _ => 0,
             });
