@@ -22,8 +22,8 @@ pub use config::{MpmConfig, MpmParameters};
 pub use error::MpmError;
 pub use grid::{Grid, GridParameters};
 pub use material::{
-    Constitutive, LinearThermoElastic, MaterialInput, MaterialResponse, StresslessConductor,
-    ThermoElasticParameters,
+    Constitutive, DruckerPrager, DruckerPragerParameters, DruckerPragerState, LinearThermoElastic,
+    MaterialInput, MaterialResponse, StresslessConductor, ThermoElasticParameters,
 };
 pub use points::{MaterialPoints, PointProperties};
 pub use stepper::{GridFields, Mpm, MpmState, NodeSums, TimeStepLimits};
