@@ -145,6 +145,13 @@ impl FlowState {
         Self::from_masses(network, volume, temperature, mq, mp, fluid)
     }
 
+    /// Recomputes fraction, pressure and densities of every pore from its masses, volume and
+    /// temperature (A-Eq. 29). Call after changing masses or volumes outside the stepper
+    /// (e.g. after a remap); the stepper keeps the state closed itself.
+    pub fn close(&mut self, fluid: &impl PoreFluid) -> Result<(), FlowError> {
+        crate::stepper::close_pores(self, fluid, 0)
+    }
+
     /// Number of pores.
     pub fn n_pores(&self) -> usize {
         self.volume.len()

@@ -607,9 +607,31 @@ impl FlowStepper {
             }
             self.inflow.push(gi);
         }
-        // Close once so that fraction, pressure, densities and stiffness match the masses
-        // (the caller may have changed masses, volumes or temperatures).
-        advance_and_close(state, fluid, &[], &[], 0.0, &mut self.stiffness, 0)
+        // The mixture stiffness of every pore from its current closure (the state is kept
+        // closed by the stepper; a caller that changes masses or volumes outside it, e.g. by a
+        // remap, calls `FlowState::close` first).
+        let FlowState {
+            liquid_fraction,
+            liquid_density,
+            gas_density,
+            temperature,
+            volume,
+            ..
+        } = &*state;
+        self.stiffness
+            .par_iter_mut()
+            .with_min_len(CHUNK)
+            .enumerate()
+            .for_each(|(p, st)| {
+                let s = crate::fluid::PoreState {
+                    liquid_fraction: liquid_fraction[p],
+                    pressure: 0.0,
+                    liquid_density: liquid_density[p],
+                    gas_density: gas_density[p],
+                };
+                *st = mixture_stiffness(fluid, &s, temperature[p], volume[p]);
+            });
+        Ok(())
     }
 
     /// The largest stable sub-step [s] for the current state (stages 1–3 without update).
