@@ -35,7 +35,7 @@
 //! `τ = G h/2` on each wall.
 
 /// Single-phase plane Poiseuille flow (A-Eq. 10): volumetric flow rate per unit width
-/// `Q = h³ G/(12 μ)` [m²/s] for aperture `h` [m], pressure gradient `G = (P_i − P_j)/L` [Pa/m]
+/// `Q = h³ G/(12 μ)` [m²/s] for aperture `h` \[m\], pressure gradient `G = (P_i − P_j)/L` [Pa/m]
 /// and viscosity `μ` [Pa·s]. The mass flow rate per unit width of A-Eq. 10 is `ρ Q`.
 pub fn poiseuille_flow_rate(aperture: f64, pressure_gradient: f64, viscosity: f64) -> f64 {
     aperture * aperture * aperture * pressure_gradient / (12.0 * viscosity)
@@ -49,16 +49,16 @@ pub struct TwoLayerFlow {
     pub liquid_flow_rate: f64,
     /// Volumetric flow rate of the gas layer per unit width [m²/s].
     pub gas_flow_rate: f64,
-    /// Shear stress the fluid exerts on the wall in contact with the liquid [Pa].
+    /// Shear stress the fluid exerts on the wall in contact with the liquid \[Pa\].
     pub liquid_wall_shear: f64,
-    /// Shear stress the fluid exerts on the wall in contact with the gas [Pa].
+    /// Shear stress the fluid exerts on the wall in contact with the gas \[Pa\].
     pub gas_wall_shear: f64,
     /// Velocity at the interface [m/s] (the centreline-plane velocity in single-phase limits).
     pub interface_velocity: f64,
 }
 
 impl TwoLayerFlow {
-    /// Mean of the two wall shear stresses, `G h / 2` [Pa]: the stress given to each of the
+    /// Mean of the two wall shear stresses, `G h / 2` \[Pa\]: the stress given to each of the
     /// two spheres bounding an S2S channel (see the crate docs).
     pub fn mean_wall_shear(&self) -> f64 {
         0.5 * (self.liquid_wall_shear + self.gas_wall_shear)
@@ -67,7 +67,7 @@ impl TwoLayerFlow {
 
 /// Solves the stratified two-layer flow of A-Eqs. 11–15 in closed form.
 ///
-/// - `aperture` `h` [m] (≥ 0; zero gives no flow),
+/// - `aperture` `h` \[m\] (≥ 0; zero gives no flow),
 /// - `liquid_fraction` `α_q ∈ [0, 1]`: the liquid layer has thickness `a = α_q h` (the rule
 ///   that sets `α_q` from the two pores is the solver's, see the crate docs),
 /// - `pressure_gradient` `G = (P_i − P_j)/L` [Pa/m],

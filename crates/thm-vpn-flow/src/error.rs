@@ -18,19 +18,19 @@ pub enum ClosureFailure {
     NegativeMass {
         /// Which phase.
         phase: Phase,
-        /// The mass [kg].
+        /// The mass \[kg\].
         value: f64,
     },
     /// The pore volume is zero, negative or not finite.
     #[error("pore volume {value:e} m³: must be finite and > 0")]
     NonPositiveVolume {
-        /// The volume [m³].
+        /// The volume \[m³\].
         value: f64,
     },
     /// The temperature is zero, negative or not finite.
     #[error("temperature {value} K: must be finite and > 0")]
     NonPositiveTemperature {
-        /// The temperature [K].
+        /// The temperature \[K\].
         value: f64,
     },
     /// The pore holds no mass of either phase: no pressure is defined.
@@ -56,7 +56,7 @@ pub enum FlowError {
     NegativeAperture {
         /// Channel index.
         channel: usize,
-        /// The aperture [m].
+        /// The aperture \[m\].
         value: f64,
     },
     /// A channel or boundary link length is zero, negative or not finite.
@@ -66,7 +66,7 @@ pub enum FlowError {
         what: &'static str,
         /// Its index.
         index: usize,
-        /// The length [m].
+        /// The length \[m\].
         value: f64,
     },
     /// A channel or link refers to a pore that does not exist, or joins a pore to itself.
@@ -89,7 +89,7 @@ pub enum FlowError {
     NonPositiveVolume {
         /// Pore index.
         pore: usize,
-        /// The volume [m³].
+        /// The volume \[m³\].
         value: f64,
         /// Outer step counter of the state (0 before the first step).
         step: u64,
@@ -154,7 +154,7 @@ pub enum FlowError {
         step: u64,
         /// Sub-steps taken.
         substeps: u32,
-        /// The last sub-step limit [s].
+        /// The last sub-step limit \[s\].
         dt_limit: f64,
         /// `"stability"` or `"liquid positivity"` / `"gas positivity"`.
         limit: &'static str,

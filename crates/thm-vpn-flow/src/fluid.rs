@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 pub struct PoreState {
     /// Liquid volume fraction `α_q ∈ [0, 1]`.
     pub liquid_fraction: f64,
-    /// Common pressure of both phases [Pa].
+    /// Common pressure of both phases \[Pa\].
     pub pressure: f64,
     /// Liquid density [kg/m³] (meaningful also when `α_q = 0`: the density the liquid would
     /// have at `pressure`).
@@ -25,8 +25,8 @@ pub struct PoreState {
 /// Implementations must be deterministic and thread-safe (`Sync`): the solver closes pores in
 /// parallel.
 pub trait PoreFluid: Sync {
-    /// The closure (A-Eq. 29): from the liquid and gas masses [kg] in a pore of `volume` [m³]
-    /// at `temperature` [K], the liquid fraction at which both phases have the same pressure,
+    /// The closure (A-Eq. 29): from the liquid and gas masses \[kg\] in a pore of `volume` \[m³\]
+    /// at `temperature` \[K\], the liquid fraction at which both phases have the same pressure,
     /// that pressure and the phase densities. Must satisfy, to round-off,
     /// `α_q ρ_q V = m_q` and `(1 − α_q) ρ_p V = m_p`; a pore with one phase has `α_q ∈ {0, 1}`.
     fn close(
@@ -37,12 +37,12 @@ pub trait PoreFluid: Sync {
         temperature: f64,
     ) -> Result<PoreState, ClosureFailure>;
 
-    /// Density of one phase at `pressure` [Pa] and `temperature` [K] (used for fluid entering
+    /// Density of one phase at `pressure` \[Pa\] and `temperature` \[K\] (used for fluid entering
     /// through a prescribed-pressure boundary and for initial states).
     fn density(&self, phase: Phase, pressure: f64, temperature: f64)
     -> Result<f64, ClosureFailure>;
 
-    /// Isothermal bulk modulus `K = ρ ∂P/∂ρ` [Pa] of one phase at `density` and `temperature`
+    /// Isothermal bulk modulus `K = ρ ∂P/∂ρ` \[Pa\] of one phase at `density` and `temperature`
     /// (used for the stable time step).
     fn bulk_modulus(&self, phase: Phase, density: f64, temperature: f64) -> f64;
 }
@@ -54,9 +54,9 @@ pub trait PoreFluid: Sync {
 pub struct LinearLiquidIdealGasParameters {
     /// Liquid density at the reference pressure `ρ₀` [kg/m³].
     pub liquid_reference_density: f64,
-    /// Reference pressure `P₀` [Pa].
+    /// Reference pressure `P₀` \[Pa\].
     pub liquid_reference_pressure: f64,
-    /// Liquid bulk modulus `K` [Pa] (must exceed `P₀`).
+    /// Liquid bulk modulus `K` \[Pa\] (must exceed `P₀`).
     pub liquid_bulk_modulus: f64,
     /// Molar mass of the gas `w_p` [kg/kmol] (Table 1: air 28.9647).
     pub gas_molar_mass: f64,

@@ -7,7 +7,7 @@ use crate::params::FlowConfig;
 use crate::state::FlowState;
 use thm_vpn_mesh::NONE;
 
-/// Adds the fluid forces on every sphere [N] to `out` (indexed by sphere; `out` is not
+/// Adds the fluid forces on every sphere \[N\] to `out` (indexed by sphere; `out` is not
 /// cleared):
 ///
 /// - pressure (A-Eqs. 52–53): every face between a virtual pore `i` and a solid cell of

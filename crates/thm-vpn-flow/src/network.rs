@@ -12,9 +12,9 @@ pub enum BoundaryCondition {
     /// A reservoir at a prescribed pressure. Fluid flows through half-channels between the
     /// boundary pores and the reservoir; fluid that enters has the reservoir's composition.
     Pressure {
-        /// Reservoir pressure [Pa] (> 0).
+        /// Reservoir pressure \[Pa\] (> 0).
         pressure: f64,
-        /// Reservoir temperature [K] (> 0): sets the density of the fluid that enters.
+        /// Reservoir temperature \[K\] (> 0): sets the density of the fluid that enters.
         temperature: f64,
         /// Liquid fraction `α_q ∈ [0, 1]` of the fluid that enters (1: water, 0: air).
         entering_liquid_fraction: f64,
@@ -78,13 +78,13 @@ impl BoundaryCondition {
 pub struct NetworkParts {
     /// Number of pores.
     pub n_pores: usize,
-    /// Out-of-plane width of every channel [m] (paper A: the largest sphere diameter).
+    /// Out-of-plane width of every channel \[m\] (paper A: the largest sphere diameter).
     pub width: f64,
     /// The two pores each channel joins.
     pub channel_pores: Vec<[u32; 2]>,
-    /// Channel lengths [m] (> 0).
+    /// Channel lengths \[m\] (> 0).
     pub channel_length: Vec<f64>,
-    /// Channel apertures [m] (≥ 0).
+    /// Channel apertures \[m\] (≥ 0).
     pub channel_aperture: Vec<f64>,
     /// Unit vector from the first pore's centroid to the second's (for shear forces; may be
     /// empty, then zero).
@@ -98,11 +98,11 @@ pub struct NetworkParts {
     pub link_pore: Vec<u32>,
     /// Group of each boundary link (index into `boundaries`).
     pub link_group: Vec<u32>,
-    /// Link length: pore centroid to boundary face centre [m] (> 0).
+    /// Link length: pore centroid to boundary face centre \[m\] (> 0).
     pub link_length: Vec<f64>,
-    /// Link aperture [m] (≥ 0).
+    /// Link aperture \[m\] (≥ 0).
     pub link_aperture: Vec<f64>,
-    /// Length of the boundary face of the link [m] (> 0; weights mass-rate conditions).
+    /// Length of the boundary face of the link \[m\] (> 0; weights mass-rate conditions).
     pub link_face_length: Vec<f64>,
     /// Pore of each fluid–solid wall face.
     pub wall_pore: Vec<u32>,
@@ -110,7 +110,7 @@ pub struct NetworkParts {
     pub wall_sphere: Vec<u32>,
     /// Unit normal of each wall face, pointing from the fluid into the solid.
     pub wall_normal: Vec<[f64; 2]>,
-    /// Wall face lengths `e_k` [m].
+    /// Wall face lengths `e_k` \[m\].
     pub wall_length: Vec<f64>,
 }
 
@@ -416,7 +416,7 @@ impl Network {
         Ok(net)
     }
 
-    /// Pore volumes `area × thickness` [m³] of a mesh's fluid cells, in pore order.
+    /// Pore volumes `area × thickness` \[m³\] of a mesh's fluid cells, in pore order.
     pub fn pore_volumes(&self, mesh: &PoreMesh) -> Vec<f64> {
         self.pore_cell
             .iter()
@@ -440,7 +440,7 @@ impl Network {
     pub fn n_groups(&self) -> usize {
         self.parts.boundaries.len()
     }
-    /// Channel width (out-of-plane thickness) [m].
+    /// Channel width (out-of-plane thickness) \[m\].
     pub fn width(&self) -> f64 {
         self.parts.width
     }
@@ -452,7 +452,7 @@ impl Network {
     pub fn pore_cell(&self) -> &[u32] {
         &self.pore_cell
     }
-    /// Total face length of each boundary group [m].
+    /// Total face length of each boundary group \[m\].
     pub fn group_face_length(&self) -> &[f64] {
         &self.group_face_length
     }

@@ -13,27 +13,27 @@ use serde::{Deserialize, Serialize};
 pub struct FlowState {
     /// Outer steps taken.
     pub step: u64,
-    /// Simulated time [s].
+    /// Simulated time \[s\].
     pub time: f64,
-    /// Pore volumes `V` [m³].
+    /// Pore volumes `V` \[m³\].
     pub volume: Vec<f64>,
-    /// Pore temperatures [K] (input from the heat solver).
+    /// Pore temperatures \[K\] (input from the heat solver).
     pub temperature: Vec<f64>,
-    /// Liquid mass `α_q ρ_q V` [kg].
+    /// Liquid mass `α_q ρ_q V` \[kg\].
     pub liquid_mass: Vec<f64>,
-    /// Gas mass `α_p ρ_p V` [kg].
+    /// Gas mass `α_p ρ_p V` \[kg\].
     pub gas_mass: Vec<f64>,
     /// Liquid fraction `α_q` [-].
     pub liquid_fraction: Vec<f64>,
-    /// Common pressure [Pa].
+    /// Common pressure \[Pa\].
     pub pressure: Vec<f64>,
     /// Liquid density [kg/m³].
     pub liquid_density: Vec<f64>,
     /// Gas density [kg/m³].
     pub gas_density: Vec<f64>,
-    /// Liquid mass that entered through each boundary group since the start [kg].
+    /// Liquid mass that entered through each boundary group since the start \[kg\].
     pub boundary_liquid_inflow: Vec<f64>,
-    /// Gas mass that entered through each boundary group since the start [kg].
+    /// Gas mass that entered through each boundary group since the start \[kg\].
     pub boundary_gas_inflow: Vec<f64>,
 }
 
@@ -157,12 +157,12 @@ impl FlowState {
         self.volume.len()
     }
 
-    /// Total liquid mass in the pores [kg] (summed in pore order).
+    /// Total liquid mass in the pores \[kg\] (summed in pore order).
     pub fn total_liquid_mass(&self) -> f64 {
         self.liquid_mass.iter().sum()
     }
 
-    /// Total gas mass in the pores [kg] (summed in pore order).
+    /// Total gas mass in the pores \[kg\] (summed in pore order).
     pub fn total_gas_mass(&self) -> f64 {
         self.gas_mass.iter().sum()
     }

@@ -65,7 +65,7 @@ impl StepLimit {
 /// The sub-step limit and the pore that sets it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SubstepLimit {
-    /// Largest admissible sub-step [s] (infinite when nothing flows).
+    /// Largest admissible sub-step \[s\] (infinite when nothing flows).
     pub dt: f64,
     /// What sets it.
     pub limit: StepLimit,
@@ -78,7 +78,7 @@ pub struct SubstepLimit {
 pub struct StepReport {
     /// Sub-steps taken.
     pub substeps: u32,
-    /// Smallest sub-step [s].
+    /// Smallest sub-step \[s\].
     pub smallest_substep: f64,
     /// Largest phase Reynolds number in any channel or link during the step.
     pub max_reynolds: f64,
@@ -181,18 +181,54 @@ fn pipe_flux(
 }
 
 /// Per-group data of the boundary conditions for one outer step: the densities of the
-/// fluid entering through prescribed-pressure groups.
+/// fluid entering through prescribed-pressure groups (zero for other groups).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-struct GroupInflow {
-    liquid_density: f64,
-    gas_density: f64,
+pub struct GroupInflow {
+    /// Liquid density at the reservoir pressure and temperature [kg/m³].
+    pub liquid_density: f64,
+    /// Gas density at the reservoir pressure and temperature [kg/m³].
+    pub gas_density: f64,
+}
+
+/// The densities of the fluid entering through each boundary group (see [`GroupInflow`]).
+/// A failure of the fluid model names the group in the `pore` field.
+pub fn group_inflows(
+    network: &Network,
+    fluid: &impl PoreFluid,
+    step: u64,
+) -> Result<Vec<GroupInflow>, FlowError> {
+    let mut out = Vec::with_capacity(network.n_groups());
+    for (g, bc) in network.parts().boundaries.iter().enumerate() {
+        let mut gi = GroupInflow::default();
+        if let BoundaryCondition::Pressure {
+            pressure,
+            temperature,
+            ..
+        } = *bc
+        {
+            let err = |cause| FlowError::Closure {
+                pore: g,
+                step,
+                substep: 0,
+                cause,
+            };
+            gi.liquid_density = fluid
+                .density(Phase::Liquid, pressure, temperature)
+                .map_err(err)?;
+            gi.gas_density = fluid
+                .density(Phase::Gas, pressure, temperature)
+                .map_err(err)?;
+        }
+        out.push(gi);
+    }
+    Ok(out)
 }
 
 /// Stage 2: the phase mass flow rates through the boundary links (positive into the
 /// domain). Prescribed pressure: a half-channel to the reservoir, upwind as in the channels
 /// with the reservoir's composition and densities when fluid enters. Prescribed mass rate:
 /// the group's rate times the link's share of the group's face length.
-fn boundary_fluxes(
+pub fn boundary_fluxes(
     network: &Network,
     state: &FlowState,
     config: &FlowConfig,
@@ -265,7 +301,7 @@ fn boundary_fluxes(
 /// equation, with `K_i` the mixture bulk modulus) and `Δt ≤ s₊ m_k,i / (−ṁ_k,i)` for each
 /// phase losing mass.
 #[allow(clippy::too_many_arguments)]
-fn gather_pore_rates(
+pub fn gather_pore_rates(
     network: &Network,
     state: &FlowState,
     config: &FlowConfig,
@@ -384,7 +420,7 @@ fn gather_pore_rates(
 /// `dv_dt` is `dV/dt` per pore [m³/s] (empty: rigid pores). Updates `stiffness` (`K/V` of
 /// each pore's mixture, `1/K = α_q/K_q + α_p/K_p`).
 #[allow(clippy::too_many_arguments)]
-fn advance_and_close(
+pub fn advance_and_close(
     state: &mut FlowState,
     fluid: &impl PoreFluid,
     rates: &[PoreRate],
@@ -583,30 +619,7 @@ impl FlowStepper {
         self.link.resize(network.n_links(), ChannelFlux::default());
         self.rates.resize(np, PoreRate::default());
         self.stiffness.resize(np, 0.0);
-        self.inflow.clear();
-        for (g, bc) in network.parts().boundaries.iter().enumerate() {
-            let mut gi = GroupInflow::default();
-            if let BoundaryCondition::Pressure {
-                pressure,
-                temperature,
-                ..
-            } = *bc
-            {
-                let err = |cause| FlowError::Closure {
-                    pore: g,
-                    step: state.step,
-                    substep: 0,
-                    cause,
-                };
-                gi.liquid_density = fluid
-                    .density(Phase::Liquid, pressure, temperature)
-                    .map_err(err)?;
-                gi.gas_density = fluid
-                    .density(Phase::Gas, pressure, temperature)
-                    .map_err(err)?;
-            }
-            self.inflow.push(gi);
-        }
+        self.inflow = group_inflows(network, fluid, state.step)?;
         // The mixture stiffness of every pore from its current closure (the state is kept
         // closed by the stepper; a caller that changes masses or volumes outside it, e.g. by a
         // remap, calls `FlowState::close` first).
@@ -634,7 +647,7 @@ impl FlowStepper {
         Ok(())
     }
 
-    /// The largest stable sub-step [s] for the current state (stages 1–3 without update).
+    /// The largest stable sub-step \[s\] for the current state (stages 1–3 without update).
     pub fn stable_substep(
         &mut self,
         network: &Network,
@@ -656,7 +669,7 @@ impl FlowStepper {
         )
     }
 
-    /// Advances `state` by the outer step `dt` [s], sub-cycling with the stable sub-step.
+    /// Advances `state` by the outer step `dt` \[s\], sub-cycling with the stable sub-step.
     /// `dv_dt` is `dV/dt` of every pore [m³/s] from the solid motion, constant over the outer
     /// step (empty: rigid pores).
     pub fn step(
