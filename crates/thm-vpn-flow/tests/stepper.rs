@@ -5,7 +5,8 @@ mod common;
 
 use common::{config, random_closed_network, water_air};
 use proptest::prelude::*;
-use thm_vpn_flow::channel::poiseuille_flow_rate;
+use thm_vpn_flow::channel::{poiseuille_flow_rate, two_layer_flow};
+use thm_vpn_flow::stepper::{ChannelFlux, channel_fluxes};
 use thm_vpn_flow::{
     BoundaryCondition, ClosureFailure, FlowError, FlowState, FlowStepper, Network, NetworkParts,
     Phase, PoreFluid, add_sphere_forces,
@@ -113,6 +114,11 @@ fn check_conservation(seed: u64, n: usize, steps: usize, volume_rate_scale: f64)
     let tol = 64.0 * n as f64 * f64::EPSILON;
     assert!((q1 - q0).abs() <= tol * q0, "liquid {q0} -> {q1}");
     assert!((p1 - p0).abs() <= tol * p0, "gas {p0} -> {p1}");
+    // Positivity and range invariants.
+    for p in 0..n {
+        assert!(state.liquid_mass[p] >= 0.0 && state.gas_mass[p] >= 0.0);
+        assert!((0.0..=1.0).contains(&state.liquid_fraction[p]));
+    }
     // Gas did move between pores (the test is not vacuous).
     assert!(gas_start.iter().zip(&state.gas_mass).any(|(a, b)| a != b));
 }
@@ -448,4 +454,85 @@ fn mesh_network_has_links_only_on_sides_with_conditions() {
     assert!((net.group_face_length()[0] - 4e-3).abs() < 1e-15);
     assert_eq!(net.n_pores(), 64);
     assert_eq!(net.n_channels(), mesh.channels.len());
+}
+
+#[test]
+fn channel_interface_and_densities_come_from_the_upwind_pore() {
+    let net = two_pores(4e-6);
+    let fluid = water_air();
+    let cfg = config();
+    for (pressures, alphas, up) in [
+        ([3e6, 1e6], [0.3, 0.8], 0usize),
+        ([1e6, 3e6], [0.3, 0.8], 1usize),
+    ] {
+        let state = FlowState::from_pressure(
+            &net,
+            vec![1e-9; 2],
+            vec![293.15; 2],
+            &pressures,
+            &alphas,
+            &fluid,
+        )
+        .unwrap();
+        let mut out = [ChannelFlux::default()];
+        channel_fluxes(&net, &state, &cfg, &mut out);
+        let g = (state.pressure[0] - state.pressure[1]) / 2e-3;
+        let f = two_layer_flow(4e-6, state.liquid_fraction[up], g, 10.02e-4, 2.0507e-5);
+        let expect_q = state.liquid_density[up] * f.liquid_flow_rate * 8e-3;
+        let expect_p = state.gas_density[up] * f.gas_flow_rate * 8e-3;
+        assert!((out[0].liquid - expect_q).abs() <= 1e-14 * expect_q.abs());
+        assert!((out[0].gas - expect_p).abs() <= 1e-14 * expect_p.abs());
+        // Flow goes from high to low pressure.
+        assert_eq!(out[0].liquid.signum(), g.signum());
+    }
+}
+
+#[test]
+fn non_finite_and_closure_failures_stop_the_step_naming_the_pore() {
+    let net = two_pores(3e-6);
+    let fluid = water_air();
+    let mut state = FlowState::from_pressure(
+        &net,
+        vec![1e-9; 2],
+        vec![293.15; 2],
+        &[2e6, 1e6],
+        &[1.0, 1.0],
+        &fluid,
+    )
+    .unwrap();
+    let mut stepper = FlowStepper::new(config());
+    let mut bad = state.clone();
+    bad.pressure[1] = f64::NAN;
+    let e = stepper.step(&net, &mut bad, &fluid, &[], 1e-4).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            FlowError::NonFinite {
+                place: "pore",
+                index: 0,
+                step: 0,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // A sealed pure-water pore whose wall moves out stretches the water below zero pressure:
+    // no closure exists.
+    let sealed = two_pores(0.0);
+    state.step = 3;
+    let e = stepper
+        .step(&sealed, &mut state, &fluid, &[0.0, 1e-12], 1.0)
+        .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            FlowError::Closure {
+                pore: 1,
+                step: 3,
+                cause: ClosureFailure::NoSolution { .. },
+                ..
+            }
+        ),
+        "{e}"
+    );
 }
