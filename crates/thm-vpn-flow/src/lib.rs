@@ -123,7 +123,7 @@ pub mod verification;
 pub use error::{ClosureFailure, FlowError, Phase};
 pub use fluid::{LinearLiquidIdealGas, LinearLiquidIdealGasParameters, PoreFluid, PoreState};
 pub use forces::add_sphere_forces;
-pub use network::{BoundaryCondition, Network, NetworkParts};
+pub use network::{BoundaryCondition, Network, NetworkParts, SECOND_END};
 pub use params::{FlowConfig, FlowParameters};
 pub use state::FlowState;
 pub use stepper::{FlowStepper, StepReport};

@@ -120,11 +120,16 @@ pub struct Network {
     parts: NetworkParts,
     group_face_length: Vec<f64>,
     pore_channel_start: Vec<u32>,
+    /// Incident channels of each pore; the top bit is set where the pore is the channel's
+    /// second end (the flux, positive first → second, enters it).
     pore_channel: Vec<u32>,
     pore_link_start: Vec<u32>,
     pore_link: Vec<u32>,
     pore_cell: Vec<u32>,
 }
+
+/// Flag bit in [`Network::pore_channels`] entries: the pore is the channel's second end.
+pub const SECOND_END: u32 = 1 << 31;
 
 fn check_len(what: &'static str, expected: usize, got: usize) -> Result<(), FlowError> {
     if expected == got {
@@ -173,6 +178,13 @@ impl Network {
         }
         if parts.channel_contact.is_empty() {
             parts.channel_contact = vec![NONE; nc];
+        }
+        if nc >= SECOND_END as usize {
+            return Err(FlowError::OutOfRange {
+                name: "number of channels",
+                range: "< 2^31",
+                value: nc as f64,
+            });
         }
         check_len("channel_length", nc, parts.channel_length.len())?;
         check_len("channel_aperture", nc, parts.channel_aperture.len())?;
@@ -280,11 +292,12 @@ impl Network {
         }
         let (pore_channel_start, pore_channel) = csr(
             np,
-            parts
-                .channel_pores
-                .iter()
-                .enumerate()
-                .flat_map(|(c, p)| [(p[0] as usize, c as u32), (p[1] as usize, c as u32)]),
+            parts.channel_pores.iter().enumerate().flat_map(|(c, p)| {
+                [
+                    (p[0] as usize, c as u32),
+                    (p[1] as usize, c as u32 | SECOND_END),
+                ]
+            }),
         );
         let (pore_link_start, pore_link) = csr(
             np,
@@ -456,7 +469,8 @@ impl Network {
     pub fn group_face_length(&self) -> &[f64] {
         &self.group_face_length
     }
-    /// The channels incident to pore `p`.
+    /// The channels incident to pore `p`, each with [`SECOND_END`] set where `p` is the
+    /// channel's second pore (mask it off with `!SECOND_END` for the channel index).
     pub fn pore_channels(&self, p: usize) -> &[u32] {
         let (a, b) = (
             self.pore_channel_start[p] as usize,

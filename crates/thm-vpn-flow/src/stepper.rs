@@ -9,7 +9,7 @@
 use crate::channel::{poiseuille_flow_rate, two_layer_flow};
 use crate::error::{FlowError, Phase};
 use crate::fluid::PoreFluid;
-use crate::network::{BoundaryCondition, Network};
+use crate::network::{BoundaryCondition, Network, SECOND_END};
 use crate::params::FlowConfig;
 use crate::state::FlowState;
 use rayon::prelude::*;
@@ -65,6 +65,9 @@ impl StepLimit {
 /// The sub-step limit and the pore that sets it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SubstepLimit {
+    /// Largest phase Reynolds number of the channels and links (a diagnostic gathered in the
+    /// same pass).
+    pub max_reynolds: f64,
     /// Largest admissible sub-step \[s\] (infinite when nothing flows).
     pub dt: f64,
     /// What sets it.
@@ -311,20 +314,31 @@ pub fn gather_pore_rates(
     out: &mut [PoreRate],
     substep: u32,
 ) -> Result<SubstepLimit, FlowError> {
-    let parts = network.parts();
     let s_stab = config.parameters().stability_safety;
     let s_pos = config.parameters().positivity_safety;
     let none = SubstepLimit {
         dt: f64::INFINITY,
         limit: StepLimit::Stability,
         pore: usize::MAX,
+        max_reynolds: 0.0,
     };
+    // The smaller limit (ties: the smaller pore index) and the larger Reynolds number:
+    // both order-independent, so the reduction is deterministic.
     let better = |a: SubstepLimit, b: SubstepLimit| {
-        if b.dt < a.dt || (b.dt == a.dt && b.pore < a.pore) {
+        let max_reynolds = a.max_reynolds.max(b.max_reynolds);
+        let mut m = if b.dt < a.dt || (b.dt == a.dt && b.pore < a.pore) {
             b
         } else {
             a
-        }
+        };
+        m.max_reynolds = max_reynolds;
+        m
+    };
+    let candidate = |dt: f64, limit: StepLimit, pore: usize| SubstepLimit {
+        dt,
+        limit,
+        pore,
+        max_reynolds: 0.0,
     };
     out.par_chunks_mut(CHUNK)
         .enumerate()
@@ -334,23 +348,27 @@ pub fn gather_pore_rates(
                 for (k, r) in rates.iter_mut().enumerate() {
                     let p = chunk * CHUNK + k;
                     let (mut lq, mut lp, mut cond) = (0.0, 0.0, 0.0);
-                    for &c in network.pore_channels(p) {
-                        let f = &channel[c as usize];
-                        let sign = if parts.channel_pores[c as usize][0] as usize == p {
-                            -1.0
+                    let mut re = best.max_reynolds;
+                    for &entry in network.pore_channels(p) {
+                        let f = &channel[(entry & !SECOND_END) as usize];
+                        if entry & SECOND_END != 0 {
+                            lq += f.liquid;
+                            lp += f.gas;
                         } else {
-                            1.0
-                        };
-                        lq += sign * f.liquid;
-                        lp += sign * f.gas;
+                            lq -= f.liquid;
+                            lp -= f.gas;
+                        }
                         cond += f.conductance;
+                        re = re.max(f.reynolds);
                     }
                     for &l in network.pore_links(p) {
                         let f = &link[l as usize];
                         lq += f.liquid;
                         lp += f.gas;
                         cond += f.conductance;
+                        re = re.max(f.reynolds);
                     }
+                    best.max_reynolds = re;
                     for (quantity, v) in [("liquid mass rate", lq), ("gas mass rate", lp)] {
                         if !v.is_finite() {
                             return Err((
@@ -372,34 +390,15 @@ pub fn gather_pore_rates(
                     };
                     let a = stiffness[p] * cond;
                     if a > 0.0 {
-                        best = better(
-                            best,
-                            SubstepLimit {
-                                dt: s_stab / a,
-                                limit: StepLimit::Stability,
-                                pore: p,
-                            },
-                        );
+                        best = better(best, candidate(s_stab / a, StepLimit::Stability, p));
                     }
                     if lq < 0.0 {
-                        best = better(
-                            best,
-                            SubstepLimit {
-                                dt: s_pos * state.liquid_mass[p] / -lq,
-                                limit: StepLimit::LiquidPositivity,
-                                pore: p,
-                            },
-                        );
+                        let dt = s_pos * state.liquid_mass[p] / -lq;
+                        best = better(best, candidate(dt, StepLimit::LiquidPositivity, p));
                     }
                     if lp < 0.0 {
-                        best = better(
-                            best,
-                            SubstepLimit {
-                                dt: s_pos * state.gas_mass[p] / -lp,
-                                limit: StepLimit::GasPositivity,
-                                pore: p,
-                            },
-                        );
+                        let dt = s_pos * state.gas_mass[p] / -lp;
+                        best = better(best, candidate(dt, StepLimit::GasPositivity, p));
                     }
                 }
                 Ok(best)
@@ -726,13 +725,8 @@ impl FlowStepper {
             } else {
                 remaining / (remaining / limit.dt).ceil()
             };
-            // Diagnostics of this sub-step (serial, fixed order).
-            let re_channels = self
-                .channel
-                .iter()
-                .chain(self.link.iter())
-                .fold(0.0_f64, |m, f| m.max(f.reynolds));
-            report.max_reynolds = report.max_reynolds.max(re_channels);
+            // Diagnostics of this sub-step (serial over the links, fixed order).
+            report.max_reynolds = report.max_reynolds.max(limit.max_reynolds);
             report.boundary_liquid_rate.fill(0.0);
             report.boundary_gas_rate.fill(0.0);
             for (k, f) in self.link.iter().enumerate() {
