@@ -4,7 +4,7 @@
 //! own format. No physics lives here.
 //!
 //! - [`vtu`]: VTK XML unstructured grids (`.vtu`) of particles and material points (vertex
-//!   cells), triangle meshes and quad grids, with any number of scalar, vector and integer
+//!   cells), line networks, triangle meshes and quad grids, with any number of scalar, vector and integer
 //!   point and cell fields; appended raw binary, appended base64 or inline ASCII.
 //! - [`pvd`]: ParaView collections (`.pvd`) indexing a time series of frames in time order;
 //!   every change rewrites the file atomically; [`pvd::VtuSeries`] names and indexes frames.
@@ -45,4 +45,4 @@ pub use csv::{Column, CsvHistory, write_csv};
 pub use error::IoError;
 pub use plot::{render_plot_png, write_plot_csv, write_plot_png};
 pub use pvd::{PvdCollection, PvdFrame, VtuSeries};
-pub use vtu::{Cells, Encoding, Field, FieldValues, Points, UnstructuredGrid};
+pub use vtu::{CellIndices, Cells, Encoding, Field, FieldValues, Points, UnstructuredGrid};

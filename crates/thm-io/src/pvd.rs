@@ -202,6 +202,11 @@ impl VtuSeries {
         self.collection.retain_until(time)
     }
 
+    /// The series name (stem of the `.pvd` and of the frames).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
     /// The collection.
     pub fn collection(&self) -> &PvdCollection {
         &self.collection

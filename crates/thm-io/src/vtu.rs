@@ -81,29 +81,84 @@ impl<'a> From<&'a Vec<[f64; 3]>> for Points<'a> {
     }
 }
 
+/// Point indices of cells with `N` points each, `usize` or `u32`, borrowed or owned.
+#[derive(Debug, Clone)]
+pub enum CellIndices<'a, const N: usize> {
+    /// `usize` indices.
+    Usize(Cow<'a, [[usize; N]]>),
+    /// `u32` indices (compact meshes).
+    U32(Cow<'a, [[u32; N]]>),
+}
+
+impl<const N: usize> CellIndices<'_, N> {
+    fn len(&self) -> usize {
+        match self {
+            CellIndices::Usize(c) => c.len(),
+            CellIndices::U32(c) => c.len(),
+        }
+    }
+
+    /// The point indices of cell `c` (`c < len`).
+    #[inline]
+    fn cell(&self, c: usize) -> [usize; N] {
+        match self {
+            CellIndices::Usize(v) => v[c],
+            CellIndices::U32(v) => v[c].map(|i| i as usize),
+        }
+    }
+}
+
+impl<'a, const N: usize> From<&'a [[usize; N]]> for CellIndices<'a, N> {
+    fn from(c: &'a [[usize; N]]) -> Self {
+        CellIndices::Usize(Cow::Borrowed(c))
+    }
+}
+
+impl<'a, const N: usize> From<&'a Vec<[usize; N]>> for CellIndices<'a, N> {
+    fn from(c: &'a Vec<[usize; N]>) -> Self {
+        CellIndices::Usize(Cow::Borrowed(c))
+    }
+}
+
+impl<'a, const N: usize> From<&'a [[u32; N]]> for CellIndices<'a, N> {
+    fn from(c: &'a [[u32; N]]) -> Self {
+        CellIndices::U32(Cow::Borrowed(c))
+    }
+}
+
+impl<'a, const N: usize> From<&'a Vec<[u32; N]>> for CellIndices<'a, N> {
+    fn from(c: &'a Vec<[u32; N]>) -> Self {
+        CellIndices::U32(Cow::Borrowed(c))
+    }
+}
+
 /// The cells of a grid: a single block of one cell type.
 #[derive(Debug, Clone)]
 pub enum Cells<'a> {
     /// One `VTK_VERTEX` per point (particles, material points).
     Vertices,
+    /// `VTK_LINE` cells (channels, bonds).
+    Lines(CellIndices<'a, 2>),
     /// `VTK_TRIANGLE` cells, counter-clockwise point indices.
-    Triangles(Cow<'a, [[usize; 3]]>),
+    Triangles(CellIndices<'a, 3>),
     /// `VTK_QUAD` cells, counter-clockwise point indices.
-    Quads(Cow<'a, [[usize; 4]]>),
+    Quads(CellIndices<'a, 4>),
 }
 
 impl Cells<'_> {
     fn count(&self, n_points: usize) -> usize {
         match self {
             Cells::Vertices => n_points,
-            Cells::Triangles(t) => t.len(),
-            Cells::Quads(q) => q.len(),
+            Cells::Lines(c) => c.len(),
+            Cells::Triangles(c) => c.len(),
+            Cells::Quads(c) => c.len(),
         }
     }
 
     fn points_per_cell(&self) -> usize {
         match self {
             Cells::Vertices => 1,
+            Cells::Lines(_) => 2,
             Cells::Triangles(_) => 3,
             Cells::Quads(_) => 4,
         }
@@ -113,8 +168,24 @@ impl Cells<'_> {
     fn vtk_type(&self) -> u8 {
         match self {
             Cells::Vertices => 1,
+            Cells::Lines(_) => 3,
             Cells::Triangles(_) => 5,
             Cells::Quads(_) => 9,
+        }
+    }
+
+    /// Calls `f` with the point indices of cell `c`, in order.
+    #[inline]
+    fn try_for_each_index<E>(
+        &self,
+        c: usize,
+        mut f: impl FnMut(usize) -> Result<(), E>,
+    ) -> Result<(), E> {
+        match self {
+            Cells::Vertices => f(c),
+            Cells::Lines(v) => v.cell(c).into_iter().try_for_each(f),
+            Cells::Triangles(v) => v.cell(c).into_iter().try_for_each(f),
+            Cells::Quads(v) => v.cell(c).into_iter().try_for_each(f),
         }
     }
 }
@@ -167,14 +238,22 @@ impl<'a> UnstructuredGrid<'a> {
         Self::new(points.into(), Cells::Vertices)
     }
 
+    /// Line segments between points (pore-network channels, bonds).
+    pub fn lines(points: impl Into<Points<'a>>, lines: impl Into<CellIndices<'a, 2>>) -> Self {
+        Self::new(points.into(), Cells::Lines(lines.into()))
+    }
+
     /// A triangle mesh.
-    pub fn triangles(points: impl Into<Points<'a>>, triangles: &'a [[usize; 3]]) -> Self {
-        Self::new(points.into(), Cells::Triangles(Cow::Borrowed(triangles)))
+    pub fn triangles(
+        points: impl Into<Points<'a>>,
+        triangles: impl Into<CellIndices<'a, 3>>,
+    ) -> Self {
+        Self::new(points.into(), Cells::Triangles(triangles.into()))
     }
 
     /// A quadrilateral mesh.
-    pub fn quads(points: impl Into<Points<'a>>, quads: &'a [[usize; 4]]) -> Self {
-        Self::new(points.into(), Cells::Quads(Cow::Borrowed(quads)))
+    pub fn quads(points: impl Into<Points<'a>>, quads: impl Into<CellIndices<'a, 4>>) -> Self {
+        Self::new(points.into(), Cells::Quads(quads.into()))
     }
 
     /// A regular 2D grid of `cells[0] × cells[1]` quads of size `spacing`, lower-left corner at
@@ -223,7 +302,7 @@ impl<'a> UnstructuredGrid<'a> {
         }
         Ok(Self::new(
             Points::D2(Cow::Owned(points)),
-            Cells::Quads(Cow::Owned(quads)),
+            Cells::Quads(CellIndices::Usize(Cow::Owned(quads))),
         ))
     }
 
@@ -290,22 +369,20 @@ impl<'a> UnstructuredGrid<'a> {
                 }
             }
         }
-        let check = |cell: usize, ids: &[usize]| {
-            ids.iter()
-                .find(|&&i| i >= n_points)
-                .map_or(Ok(()), |&index| {
+        for cell in 0..n_cells {
+            self.cells.try_for_each_index(cell, |index| {
+                if index < n_points {
+                    Ok(())
+                } else {
                     Err(IoError::CellIndex {
                         cell,
                         index,
                         n_points,
                     })
-                })
-        };
-        match &self.cells {
-            Cells::Vertices => Ok(()),
-            Cells::Triangles(t) => t.iter().enumerate().try_for_each(|(c, ids)| check(c, ids)),
-            Cells::Quads(q) => q.iter().enumerate().try_for_each(|(c, ids)| check(c, ids)),
+                }
+            })?;
         }
+        Ok(())
     }
 
     /// Validates the grid and writes it to `path` (atomically: a reader sees the old file or
@@ -545,23 +622,13 @@ impl Source<'_> {
                     push_bytes(chunk, x.to_le_bytes(), w)?;
                 }
             }
-            Source::Connectivity => match &g.cells {
-                Cells::Vertices => {
-                    for i in 0..g.n_points() as i64 {
-                        push_bytes(chunk, i.to_le_bytes(), w)?;
-                    }
+            Source::Connectivity => {
+                for c in 0..g.n_cells() {
+                    g.cells.try_for_each_index(c, |i| {
+                        push_bytes(chunk, (i as i64).to_le_bytes(), w)
+                    })?;
                 }
-                Cells::Triangles(t) => {
-                    for &i in t.iter().flatten() {
-                        push_bytes(chunk, (i as i64).to_le_bytes(), w)?;
-                    }
-                }
-                Cells::Quads(q) => {
-                    for &i in q.iter().flatten() {
-                        push_bytes(chunk, (i as i64).to_le_bytes(), w)?;
-                    }
-                }
-            },
+            }
             Source::Offsets => {
                 let k = g.cells.points_per_cell() as i64;
                 for c in 1..=g.n_cells() as i64 {
@@ -614,23 +681,17 @@ impl Source<'_> {
                     }
                 }
             },
-            Source::Connectivity => match &g.cells {
-                Cells::Vertices => {
-                    for i in 0..g.n_points() {
-                        writeln!(w, "{i}")?;
-                    }
+            Source::Connectivity => {
+                for c in 0..g.n_cells() {
+                    let mut sep = "";
+                    g.cells.try_for_each_index(c, |i| {
+                        let r = write!(w, "{sep}{i}");
+                        sep = " ";
+                        r
+                    })?;
+                    writeln!(w)?;
                 }
-                Cells::Triangles(t) => {
-                    for [a, b, c] in t.iter() {
-                        writeln!(w, "{a} {b} {c}")?;
-                    }
-                }
-                Cells::Quads(q) => {
-                    for [a, b, c, d] in q.iter() {
-                        writeln!(w, "{a} {b} {c} {d}")?;
-                    }
-                }
-            },
+            }
             Source::Offsets => {
                 let k = g.cells.points_per_cell();
                 for c in 1..=g.n_cells() {

@@ -184,7 +184,7 @@ fn particles_3d_read_back_identical() {
 fn triangle_mesh_with_cell_data_read_back_identical() {
     // Two triangles sharing an edge, 2D points.
     let pts = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-    let tris = vec![[0, 1, 2], [0, 2, 3]];
+    let tris: Vec<[usize; 3]> = vec![[0, 1, 2], [0, 2, 3]];
     let kind = vec![0, 1];
     let area = vec![0.5, 0.5];
     let pressure = vec![1.0e5, 2.5e6];
@@ -276,7 +276,7 @@ fn material_points_and_regular_grid_read_back_identical() {
 #[test]
 fn bad_grids_are_typed_errors() {
     let pts = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]];
-    let tris = vec![[0, 1, 3]];
+    let tris: Vec<[usize; 3]> = vec![[0, 1, 3]];
     let err = UnstructuredGrid::triangles(&pts, &tris)
         .validate()
         .unwrap_err();
@@ -392,4 +392,55 @@ fn binary_frames_use_at_most_twice_the_raw_bytes() {
         assert!(ratio <= limit && ratio <= 2.0, "{enc:?}: {ratio}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Meshes indexed with `u32` (as pore meshes are) and line networks (channels).
+#[test]
+fn u32_triangles_and_line_networks_read_back_identical() {
+    let pts = vec![[0.0, 0.0], [2.0, 0.0], [1.0, 1.5], [3.0, 1.5]];
+    let tris: Vec<[u32; 3]> = vec![[0, 1, 2], [1, 3, 2]];
+    let pressure = vec![1e5, 2e5];
+    let mesh = UnstructuredGrid::triangles(&pts, &tris)
+        .with_cell_field("pressure [Pa]", FieldValues::Scalar(&pressure));
+    check_all_encodings(
+        "u32_triangles",
+        &mesh,
+        &Read {
+            points: flat2(&pts),
+            connectivity: vec![0, 1, 2, 1, 3, 2],
+            offsets: vec![3, 6],
+            types: vec![5, 5],
+            point_fields: vec![],
+            cell_fields: vec![("pressure [Pa]".into(), pressure.clone())],
+        },
+    );
+    let channels: Vec<[u32; 2]> = vec![[0, 1], [1, 2], [2, 3]];
+    let aperture = vec![1e-6, 2e-6, 3e-6];
+    let net = UnstructuredGrid::lines(&pts, &channels)
+        .with_cell_field("aperture [m]", FieldValues::Scalar(&aperture));
+    check_all_encodings(
+        "lines",
+        &net,
+        &Read {
+            points: flat2(&pts),
+            connectivity: vec![0, 1, 1, 2, 2, 3],
+            offsets: vec![2, 4, 6],
+            types: vec![3, 3, 3],
+            point_fields: vec![],
+            cell_fields: vec![("aperture [m]".into(), aperture.clone())],
+        },
+    );
+    let bad: Vec<[u32; 2]> = vec![[0, 9]];
+    let err = UnstructuredGrid::lines(&pts, &bad).validate().unwrap_err();
+    assert!(
+        matches!(
+            err,
+            IoError::CellIndex {
+                cell: 0,
+                index: 9,
+                n_points: 4
+            }
+        ),
+        "{err}"
+    );
 }

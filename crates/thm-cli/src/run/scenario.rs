@@ -251,10 +251,7 @@ pub fn drive<S: Scenario>(
     let mut write_frame = |scenario: &mut S, state: &S::State, step: u64| -> Result<(), RunError> {
         let t = time_of(step);
         scenario.frame(state, &mut |name: &str, grid: &UnstructuredGrid<'_>| {
-            let k = match series
-                .iter()
-                .position(|s| s.collection().path().ends_with(format!("{name}.pvd")))
-            {
+            let k = match series.iter().position(|s| s.name() == name) {
                 Some(k) => k,
                 None => {
                     let mut s = VtuSeries::new(out, name, encoding)?;

@@ -69,15 +69,17 @@ fn read(p: &Path) -> Vec<u8> {
     std::fs::read(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 
-/// The files that must agree byte for byte between two runs of the same scenario.
-fn assert_same_results(a: &Path, b: &Path, n: u64) {
-    for rel in [
+/// The files that must agree byte for byte between two runs of the same scenario: the
+/// history, the series index, the resolved scenario, the frames of `frames` of series
+/// `series`, and the checkpoint of the last step `n`.
+fn assert_same_results(a: &Path, b: &Path, series: &str, frames: &[u64], n: u64) {
+    let mut files = vec![
         "history.csv".to_string(),
-        "particles.pvd".to_string(),
+        format!("{series}.pvd"),
         "scenario.toml".to_string(),
-        format!("particles/particles_{n:08}.vtu"),
-        format!("particles/particles_{:08}.vtu", 75),
-    ] {
+    ];
+    files.extend(frames.iter().map(|f| format!("{series}/{series}_{f:08}.vtu")));
+    for rel in files {
         assert!(read(&a.join(&rel)) == read(&b.join(&rel)), "{rel} differs");
     }
     assert!(
@@ -106,7 +108,7 @@ fn resume_from_a_mid_run_checkpoint_is_bitwise_identical() {
         run(&file, &resumed, Some(&mid)).unwrap(),
         Outcome::Finished { steps: 100, .. }
     ));
-    assert_same_results(&full, &resumed, 100);
+    assert_same_results(&full, &resumed, "particles", &[75, 100], 100);
     // The history has every recorded step exactly once, in time order.
     let text = std::fs::read_to_string(resumed.join("history.csv")).unwrap();
     let times: Vec<f64> = text
@@ -135,7 +137,7 @@ fn interrupt_writes_a_checkpoint_and_resuming_it_matches_the_uninterrupted_run()
     let summary = std::fs::read_to_string(cut.join("summary.md")).unwrap();
     assert!(summary.contains("--resume"), "{summary}");
     run(&file, &cut, Some(&checkpoint)).unwrap();
-    assert_same_results(&full, &cut, 100);
+    assert_same_results(&full, &cut, "particles", &[75, 100], 100);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
