@@ -52,7 +52,7 @@ fn bench(c: &mut Criterion) {
         let vel: Vec<[f64; 2]> = (0..k)
             .map(|i| [1e-4 * (i as f64).sin(), 1e-4 * (i as f64).cos()])
             .collect();
-        let omega: Vec<f64> = (0..k).map(|i| 0.1 * (0.3 * i as f64).sin()).collect();
+        let omega: Vec<f64> = (0..k).map(|i| 0.01 * (0.3 * i as f64).sin()).collect();
         let rdot = vec![1e-7; k];
         let centre: Vec<[f64; 2]> = cs
             .iter()

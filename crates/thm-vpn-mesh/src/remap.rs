@@ -220,7 +220,7 @@ impl RemapOperator {
                     (p[0][0] + p[1][0] + p[2][0]) / 3.0,
                     (p[0][1] + p[1][1] + p[2][1]) / 3.0,
                 ];
-                let (gx, _, gy, _, ..) = bin_range(&[g, g, g]);
+                let (gx, _, gy, ..) = bin_range(&[g, g, g]);
                 let bin = gy * nx + gx;
                 let seed = items[start[bin] as usize..start[bin + 1] as usize]
                     .iter()
@@ -228,9 +228,14 @@ impl RemapOperator {
                     .find(|&c| contains(&tri_points(new, c as usize), g));
                 match seed {
                     Some(s) => {
+                        let (.., a, b) = bin_range(&p);
                         stamp[s as usize] = tag;
                         stack.push(s);
                         while let Some(c) = stack.pop() {
+                            let (ca, cb) = new_bbox[c as usize];
+                            if ca[0] >= b[0] || cb[0] <= a[0] || ca[1] >= b[1] || cb[1] <= a[1] {
+                                continue;
+                            }
                             let ov = triangle_overlap_area(&p, &tri_points(new, c as usize));
                             if ov > 0.0 {
                                 target.push(c);
