@@ -642,5 +642,17 @@ mod tests {
         )
         .unwrap_err();
         assert!(matches!(e, TopologyError::VertexOutOfRange { .. }));
+        // Three triangles on one edge.
+        let e = PoreMesh::from_triangles(
+            vec![[0.0, 0.0], [1.0, 0.0], [0.5, 1.0], [0.5, -1.0], [0.5, 2.0]],
+            vec![NONE; 5],
+            vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]],
+            vec![CellKind::Fluid; 3],
+            1.0,
+            1e-9,
+            1.0,
+        )
+        .unwrap_err();
+        assert_eq!(e, TopologyError::NonManifoldEdge { a: 0, b: 1 });
     }
 }

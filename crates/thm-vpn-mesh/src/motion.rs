@@ -177,16 +177,42 @@ pub fn circle_frames(motion: &CircleMotion<'_>, frames: &mut Vec<CircleFrame>) {
 }
 
 /// Position and velocity of every vertex for the given circle state (stage "vertex
-/// kinematics"). `pos` and `vel` must have one entry per vertex.
+/// kinematics"); `n_circles` is the number of circles at mesh time. `pos` and `vel` must have
+/// one entry per vertex.
 pub fn vertex_kinematics(
     anchors: &VertexAnchors,
+    n_circles: usize,
     motion: &CircleMotion<'_>,
     pos: &mut [[f64; 2]],
     vel: &mut [[f64; 2]],
-) {
+) -> Result<(), MeshError> {
+    motion.validate(n_circles)?;
+    for (what, got) in [("pos", pos.len()), ("vel", vel.len())] {
+        if got != anchors.len() {
+            return Err(MeshError::LengthMismatch {
+                what,
+                expected: anchors.len(),
+                got,
+            });
+        }
+    }
+    if let Some(&bad) = anchors
+        .circle
+        .iter()
+        .zip(&anchors.count)
+        .flat_map(|(c, &n)| c[..n as usize].iter())
+        .find(|&&i| i as usize >= n_circles)
+    {
+        return Err(MeshError::LengthMismatch {
+            what: "circle state (an anchor names a circle beyond it)",
+            expected: bad as usize + 1,
+            got: n_circles,
+        });
+    }
     let mut frames = Vec::new();
     circle_frames(motion, &mut frames);
     vertex_kinematics_in_frames(anchors, &frames, pos, vel);
+    Ok(())
 }
 
 /// [`vertex_kinematics`] with the circle frames computed once ([`circle_frames`]).
@@ -238,7 +264,24 @@ pub fn vertex_kinematics_in_frames(
 
 /// Area rate dA/dt of every cell [m²/s] from the vertex velocities (exact derivative of the
 /// triangle area).
-pub fn cell_area_rate(mesh: &PoreMesh, vel: &[[f64; 2]], out: &mut [f64]) {
+pub fn cell_area_rate(mesh: &PoreMesh, vel: &[[f64; 2]], out: &mut [f64]) -> Result<(), MeshError> {
+    for (what, got, expected) in [
+        ("vel", vel.len(), mesh.vertices.len()),
+        ("out", out.len(), mesh.n_cells()),
+    ] {
+        if got != expected {
+            return Err(MeshError::LengthMismatch {
+                what,
+                expected,
+                got,
+            });
+        }
+    }
+    area_rate_into(mesh, vel, out);
+    Ok(())
+}
+
+fn area_rate_into(mesh: &PoreMesh, vel: &[[f64; 2]], out: &mut [f64]) {
     for (c, t) in mesh.cell_vertices.iter().enumerate() {
         let [a, b, cc] = t.map(|v| v as usize);
         let (pa, pb, pc) = (mesh.vertices[a], mesh.vertices[b], mesh.vertices[cc]);
@@ -274,6 +317,13 @@ impl MeshMotion {
     ) -> Result<(), MeshError> {
         motion.validate(pm.circles.len())?;
         let nv = pm.anchors.len();
+        if pm.mesh.vertices.len() != nv {
+            return Err(MeshError::LengthMismatch {
+                what: "mesh vertices (against the vertex anchors)",
+                expected: nv,
+                got: pm.mesh.vertices.len(),
+            });
+        }
         self.velocity.resize(nv, [0.0; 2]);
         circle_frames(motion, &mut self.frames);
         vertex_kinematics_in_frames(
@@ -284,7 +334,7 @@ impl MeshMotion {
         );
         pm.mesh.update_geometry();
         self.volume_rate.resize(pm.mesh.n_cells(), 0.0);
-        cell_area_rate(&pm.mesh, &self.velocity, &mut self.volume_rate);
+        area_rate_into(&pm.mesh, &self.velocity, &mut self.volume_rate);
         let t = pm.mesh.thickness;
         for r in self.volume_rate.iter_mut() {
             *r *= t;

@@ -144,6 +144,11 @@ impl RemapOperator {
             h = 1.0;
         }
         let span = [(hi[0] - lo[0]).max(0.0), (hi[1] - lo[1]).max(0.0)];
+        // At most about four bins per cell.
+        let min_h = (span[0] * span[1] / (4.0 * nn.max(1) as f64)).sqrt();
+        if min_h.is_finite() && h < min_h {
+            h = min_h;
+        }
         let nx = ((span[0] / h) as usize + 1).clamp(1, 4096);
         let ny = ((span[1] / h) as usize + 1).clamp(1, 4096);
         let hx = (span[0] / nx as f64).max(f64::MIN_POSITIVE);
