@@ -50,9 +50,9 @@ fn bench(c: &mut Criterion) {
         // Geometry update: every circle moved a little.
         let k = cs.len();
         let vel: Vec<[f64; 2]> = (0..k)
-            .map(|i| [1e-4 * (i as f64).sin(), 1e-4 * (i as f64).cos()])
+            .map(|i| [2e-5 * (i as f64).sin(), 2e-5 * (i as f64).cos()])
             .collect();
-        let omega: Vec<f64> = (0..k).map(|i| 0.1 * (0.3 * i as f64).sin()).collect();
+        let omega: Vec<f64> = (0..k).map(|i| 0.002 * (0.3 * i as f64).sin()).collect();
         let rdot = vec![1e-7; k];
         let centre: Vec<[f64; 2]> = cs
             .iter()

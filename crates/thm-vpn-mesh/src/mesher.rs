@@ -261,6 +261,46 @@ impl PackingMesh {
     }
 }
 
+/// A small multiplicative hasher for the integer keys of the mesher (the default SipHash is
+/// several times slower and its DoS resistance is not needed here).
+#[derive(Debug, Default, Clone, Copy)]
+struct KeyHasher(u64);
+
+impl KeyHasher {
+    #[inline]
+    fn add(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+impl std::hash::Hasher for KeyHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.add(u64::from(b));
+        }
+    }
+    fn write_u8(&mut self, i: u8) {
+        self.add(u64::from(i));
+    }
+    fn write_u32(&mut self, i: u32) {
+        self.add(u64::from(i));
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.add(i);
+    }
+    fn write_usize(&mut self, i: usize) {
+        self.add(i as u64);
+    }
+    fn write_isize(&mut self, i: isize) {
+        self.add(i as u64);
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+type KeyMap<K, V> = HashMap<K, V, std::hash::BuildHasherDefault<KeyHasher>>;
+
 /// What a vertex is, geometrically; the key that makes shared vertices identical.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 enum VKey {
@@ -915,18 +955,20 @@ fn circumradius(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 }
 
 /// Anchors of every vertex from the keys merged into it.
-fn anchors_from_keys(
-    keys: &[Vec<VKey>],
+fn anchors_from_keys<I: Iterator<Item = VKey>>(
+    used_old: &[u32],
+    keys_of: impl Fn(u32) -> I,
     pos: &[[f64; 2]],
     circles: &[Circle],
     bx: Option<[f64; 4]>,
 ) -> VertexAnchors {
     let mut anchors = VertexAnchors::default();
-    for (v, ks) in keys.iter().enumerate() {
-        let mut list: Vec<u32> = Vec::with_capacity(3);
+    for (v, &old) in used_old.iter().enumerate() {
+        let mut list = [NONE; 3];
+        let mut n_list = 0usize;
         let mut constraint = VertexConstraint::Free;
-        for k in ks {
-            let (circ, con): (&[u32], VertexConstraint) = match *k {
+        for k in keys_of(old) {
+            let (circ, con): (&[u32], VertexConstraint) = match k {
                 VKey::Arc(i, _) | VKey::Centre(i) => (&[i], VertexConstraint::Free),
                 VKey::CircleCircle(a, b, _) => (&[a, b], VertexConstraint::Free),
                 VKey::Radical(a, b, c) => (&[a, b, c], VertexConstraint::Free),
@@ -936,8 +978,9 @@ fn anchors_from_keys(
             };
             // Combine `circ` into the list.
             for &i in circ {
-                if !list.contains(&i) && list.len() < 3 {
-                    list.push(i);
+                if !list[..n_list].contains(&i) && n_list < 3 {
+                    list[n_list] = i;
+                    n_list += 1;
                 }
             }
             constraint = match (constraint, con) {
@@ -953,23 +996,28 @@ fn anchors_from_keys(
                 _ => VertexConstraint::Free,
             };
         }
-        if list.is_empty() {
+        if n_list == 0 {
             constraint = VertexConstraint::Fixed;
         }
         // Any vertex exactly on a box side (e.g. the grid point of a circle touching it)
         // stays on it.
         if let Some(b) = bx {
-            let on: Vec<u8> = (0..4u8)
-                .filter(|&s| pos[v][usize::from(s >= 2)] == b[s as usize])
-                .collect();
-            constraint = match (on.len(), constraint) {
+            let mut on = [0u8; 4];
+            let mut n_on = 0;
+            for s in 0..4u8 {
+                if pos[v][usize::from(s >= 2)] == b[s as usize] {
+                    on[n_on] = s;
+                    n_on += 1;
+                }
+            }
+            constraint = match (n_on, constraint) {
                 (0, c) => c,
                 (1, VertexConstraint::Free) => VertexConstraint::OnSide(on[0]),
                 (1, VertexConstraint::OnSide(s)) if s == on[0] => VertexConstraint::OnSide(s),
                 _ => VertexConstraint::Fixed,
             };
         }
-        anchors.push(pos[v], &list, constraint, circles);
+        anchors.push(pos[v], &list[..n_list], constraint, circles);
     }
     anchors
 }
@@ -1031,7 +1079,7 @@ pub fn mesh_packing(
     let mut scratch = (Vec::new(), Vec::new());
     let mut points: Vec<[f64; 2]> = Vec::new();
     let mut keys: Vec<VKey> = Vec::new();
-    let mut key_id: HashMap<VKey, u32> = HashMap::new();
+    let mut key_id: KeyMap<VKey, u32> = KeyMap::default();
     let mut poly_start: Vec<u32> = vec![0];
     let mut poly_verts: Vec<u32> = Vec::new();
     let mut poly_out: Vec<Line> = Vec::new();
@@ -1118,17 +1166,22 @@ pub fn mesh_packing(
     let rep = snap_vertices(&points, prm.snap_tolerance * mean_r);
     let mut new_id = vec![NONE; points.len()];
     let mut vpos: Vec<[f64; 2]> = Vec::new();
-    let mut vkeys: Vec<Vec<VKey>> = Vec::new();
+    // Keys of each merged vertex: the first one, plus the rare extra ones of merged points.
+    let mut vkey_first: Vec<VKey> = Vec::with_capacity(points.len());
+    let mut vkey_extra: Vec<(u32, VKey)> = Vec::new();
     for v in 0..points.len() {
         let r = rep[v] as usize;
         if new_id[r] == NONE {
             new_id[r] = vpos.len() as u32;
             vpos.push(points[r]);
-            vkeys.push(Vec::new());
+            vkey_first.push(keys[r]);
         }
         new_id[v] = new_id[r];
-        vkeys[new_id[v] as usize].push(keys[v]);
+        if v != r {
+            vkey_extra.push((new_id[v], keys[v]));
+        }
     }
+    vkey_extra.sort_by_key(|e| e.0);
     // Polygons in new ids, consecutive duplicates removed.
     let mut polys: Vec<Vec<(u32, Line)>> = Vec::with_capacity(nc);
     for i in 0..nc {
@@ -1202,46 +1255,59 @@ pub fn mesh_packing(
         .collect();
     drop(cdt);
 
-    // Stage 6: classification by centroid.
-    let grid = CircleGrid::new(circles);
+    // Stage 6: classification. Solid polygons are convex and constrained, and the only vertex
+    // inside one is its circle's centre, so a triangle is a solid cell of circle `i` exactly
+    // when its three corners are vertices of polygon `i` (or its centre).
+    let nvp = vpos.len();
+    let mut member_start = vec![0u32; nvp + 1];
+    let centre_of = |v: usize| match vkey_first[v] {
+        VKey::Centre(i) => Some(i),
+        _ => None,
+    };
+    for pv in &polys {
+        for &(v, _) in pv {
+            member_start[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..nvp {
+        if centre_of(v).is_some() {
+            member_start[v + 1] += 1;
+        }
+    }
+    for v in 0..nvp {
+        member_start[v + 1] += member_start[v];
+    }
+    let mut member = vec![0u32; member_start[nvp] as usize];
+    let mut mfill = member_start.clone();
+    for (i, pv) in polys.iter().enumerate() {
+        for &(v, _) in pv {
+            member[mfill[v as usize] as usize] = i as u32;
+            mfill[v as usize] += 1;
+        }
+    }
+    for v in 0..nvp {
+        if let Some(i) = centre_of(v) {
+            member[mfill[v] as usize] = i;
+            mfill[v] += 1;
+        }
+    }
+    let members = |v: u32| &member[member_start[v as usize] as usize..mfill[v as usize] as usize];
     let mut tri_circle: Vec<u32> = Vec::with_capacity(tris.len());
     for t in &tris {
-        let p = t.map(|v| vpos[v as usize]);
-        let g = [
-            (p[0][0] + p[1][0] + p[2][0]) / 3.0,
-            (p[0][1] + p[1][1] + p[2][1]) / 3.0,
-        ];
-        let mut owner = NONE;
-        grid.for_near(g, |i| {
-            if owner != NONE {
-                return;
-            }
-            let c = &circles[i as usize];
-            let d = sub(g, c.centre);
-            if dot(d, d) > c.radius * c.radius {
-                return;
-            }
-            let pv = &polys[i as usize];
-            if pv.is_empty() {
-                return;
-            }
-            let n = pv.len();
-            let inside = (0..n).all(|k| {
-                let a = vpos[pv[k].0 as usize];
-                let b = vpos[pv[(k + 1) % n].0 as usize];
-                cross(sub(b, a), sub(g, a)) >= 0.0
-            });
-            if inside {
-                owner = i;
-            }
-        });
+        let (m1, m2) = (members(t[1]), members(t[2]));
+        let owner = members(t[0])
+            .iter()
+            .copied()
+            .find(|i| m1.contains(i) && m2.contains(i))
+            .unwrap_or(NONE);
         tri_circle.push(owner);
     }
 
     // Alpha-shape outline: peel fluid triangles from the hull.
     if let Outline::AlphaShape { alpha } = prm.outline {
         let nt = tris.len();
-        let mut edge_tris: HashMap<(u32, u32), [u32; 2]> = HashMap::with_capacity(nt * 2);
+        let mut edge_tris: KeyMap<(u32, u32), [u32; 2]> =
+            KeyMap::with_capacity_and_hasher(nt * 2, Default::default());
         for (ti, t) in tris.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
@@ -1296,23 +1362,28 @@ pub fn mesh_packing(
     // Drop vertices no triangle uses.
     let mut used = vec![NONE; vpos.len()];
     let mut vertices = Vec::with_capacity(vpos.len());
-    let mut used_keys: Vec<Vec<VKey>> = Vec::with_capacity(vpos.len());
+    let mut used_old: Vec<u32> = Vec::with_capacity(vpos.len());
     for t in tris.iter_mut() {
         for v in t.iter_mut() {
             if used[*v as usize] == NONE {
                 used[*v as usize] = vertices.len() as u32;
                 vertices.push(vpos[*v as usize]);
-                used_keys.push(std::mem::take(&mut vkeys[*v as usize]));
+                used_old.push(*v);
             }
             *v = used[*v as usize];
         }
     }
-    let anchors = anchors_from_keys(&used_keys, &vertices, circles, bx);
-    let vertex_sphere: Vec<u32> = used_keys
+    let keys_of = |v: u32| {
+        let lo = vkey_extra.partition_point(|e| e.0 < v);
+        let hi = vkey_extra.partition_point(|e| e.0 <= v);
+        std::iter::once(vkey_first[v as usize]).chain(vkey_extra[lo..hi].iter().map(|e| e.1))
+    };
+    let anchors = anchors_from_keys(&used_old, keys_of, &vertices, circles, bx);
+    let vertex_sphere: Vec<u32> = used_old
         .iter()
-        .map(|ks| {
-            ks.iter()
-                .find_map(|k| match *k {
+        .map(|&v| {
+            keys_of(v)
+                .find_map(|k| match k {
                     VKey::Arc(i, _) | VKey::CircleSide(i, _, _) => Some(i),
                     VKey::CircleCircle(a, _, _) => Some(a),
                     _ => None,
@@ -1348,50 +1419,7 @@ pub fn mesh_packing(
 
     // Chords: the polygon edge of circle a on line Pair(a, b).
     let mut chords = Chords::default();
-    let mut edge_face: HashMap<(u32, u32), u32> = HashMap::new();
-    for (f, fv) in mesh.face_vertices.iter().enumerate() {
-        let [c0, c1] = mesh.face_cells[f];
-        if c1 != NONE
-            && tri_circle[c0 as usize] != NONE
-            && tri_circle[c1 as usize] != NONE
-            && tri_circle[c0 as usize] != tri_circle[c1 as usize]
-        {
-            edge_face.insert((fv[0].min(fv[1]), fv[0].max(fv[1])), f as u32);
-        }
-    }
-    let mut chord_of_pair: HashMap<(u32, u32), u32> = HashMap::new();
-    for p in &pairs {
-        let (a, b) = (p[0], p[1]);
-        let (ca, cb) = (&circles[a as usize], &circles[b as usize]);
-        let d = sub(cb.centre, ca.centre);
-        let overlap = ca.radius + cb.radius - dot(d, d).sqrt();
-        let mut ends = [NONE, NONE];
-        let pv = &polys[a as usize];
-        for k in 0..pv.len() {
-            if pv[k].1 == Line::Pair(a, b) {
-                let (u, v) = (pv[k].0, pv[(k + 1) % pv.len()].0);
-                ends = [
-                    used.get(u as usize).copied().unwrap_or(NONE),
-                    used.get(v as usize).copied().unwrap_or(NONE),
-                ];
-            }
-        }
-        let face = if ends[0] != NONE && ends[1] != NONE {
-            edge_face
-                .get(&(ends[0].min(ends[1]), ends[0].max(ends[1])))
-                .copied()
-                .unwrap_or(NONE)
-        } else {
-            NONE
-        };
-        chord_of_pair.insert((a, b), chords.circles.len() as u32);
-        chords.circles.push([a, b]);
-        chords.overlap.push(overlap);
-        chords.ends.push(ends);
-        chords.face.push(face);
-    }
-
-    // S2S channels.
+    // Cells around each vertex.
     let nv = mesh.vertices.len();
     let mut vc_start = vec![0u32; nv + 1];
     for t in &mesh.cell_vertices {
@@ -1410,6 +1438,45 @@ pub fn mesh_packing(
             fill[v as usize] += 1;
         }
     }
+    let face_between = |u: u32, v: u32| -> u32 {
+        for &c in &vc[vc_start[u as usize] as usize..vc_start[u as usize + 1] as usize] {
+            for &f in &mesh.cell_faces[c as usize] {
+                let [a, b] = mesh.face_vertices[f as usize];
+                if (a == u && b == v) || (a == v && b == u) {
+                    return f;
+                }
+            }
+        }
+        NONE
+    };
+    for p in &pairs {
+        let (a, b) = (p[0], p[1]);
+        let (ca, cb) = (&circles[a as usize], &circles[b as usize]);
+        let d = sub(cb.centre, ca.centre);
+        let overlap = ca.radius + cb.radius - dot(d, d).sqrt();
+        let mut ends = [NONE, NONE];
+        let pv = &polys[a as usize];
+        for k in 0..pv.len() {
+            if pv[k].1 == Line::Pair(a, b) {
+                let (u, v) = (pv[k].0, pv[(k + 1) % pv.len()].0);
+                ends = [
+                    used.get(u as usize).copied().unwrap_or(NONE),
+                    used.get(v as usize).copied().unwrap_or(NONE),
+                ];
+            }
+        }
+        let face = if ends[0] != NONE && ends[1] != NONE && ends[0] != ends[1] {
+            face_between(ends[0], ends[1])
+        } else {
+            NONE
+        };
+        chords.circles.push([a, b]);
+        chords.overlap.push(overlap);
+        chords.ends.push(ends);
+        chords.face.push(face);
+    }
+
+    // S2S channels.
     let fluid_at = |v: u32| -> u32 {
         let x = mesh.vertices[v as usize];
         let mut best = (f64::MAX, NONE);
@@ -1431,10 +1498,10 @@ pub fn mesh_packing(
             ct.circles[0].min(ct.circles[1]),
             ct.circles[0].max(ct.circles[1]),
         );
-        let Some(&ch) = chord_of_pair.get(&(a, b)) else {
+        let Ok(ch) = chords.circles.binary_search(&[a, b]) else {
             continue;
         };
-        let ends = chords.ends[ch as usize];
+        let ends = chords.ends[ch];
         if ends[0] == NONE || ends[1] == NONE {
             continue;
         }

@@ -147,11 +147,78 @@ impl CircleMotion<'_> {
     }
 }
 
+/// The rigid-body-plus-scaling frame of one circle: centre, `r (cos φ, sin φ)`, velocity,
+/// angular velocity and `ṙ / r`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CircleFrame {
+    centre: [f64; 2],
+    r_cos: f64,
+    r_sin: f64,
+    velocity: [f64; 2],
+    omega: f64,
+    growth: f64,
+}
+
+/// Fills `frames` (one per circle) from the circle state.
+pub fn circle_frames(motion: &CircleMotion<'_>, frames: &mut Vec<CircleFrame>) {
+    frames.clear();
+    frames.extend((0..motion.centre.len()).map(|i| {
+        let r = motion.radius[i];
+        let (s, c) = motion.rotation[i].sin_cos();
+        CircleFrame {
+            centre: motion.centre[i],
+            r_cos: r * c,
+            r_sin: r * s,
+            velocity: motion.velocity[i],
+            omega: motion.angular_velocity[i],
+            growth: motion.radius_rate[i] / r,
+        }
+    }));
+}
+
 /// Position and velocity of every vertex for the given circle state (stage "vertex
-/// kinematics"). `pos` and `vel` must have one entry per vertex.
+/// kinematics"); `n_circles` is the number of circles at mesh time. `pos` and `vel` must have
+/// one entry per vertex.
 pub fn vertex_kinematics(
     anchors: &VertexAnchors,
+    n_circles: usize,
     motion: &CircleMotion<'_>,
+    pos: &mut [[f64; 2]],
+    vel: &mut [[f64; 2]],
+) -> Result<(), MeshError> {
+    motion.validate(n_circles)?;
+    for (what, got) in [("pos", pos.len()), ("vel", vel.len())] {
+        if got != anchors.len() {
+            return Err(MeshError::LengthMismatch {
+                what,
+                expected: anchors.len(),
+                got,
+            });
+        }
+    }
+    if let Some(&bad) = anchors
+        .circle
+        .iter()
+        .zip(&anchors.count)
+        .flat_map(|(c, &n)| c[..n as usize].iter())
+        .find(|&&i| i as usize >= n_circles)
+    {
+        return Err(MeshError::LengthMismatch {
+            what: "circle state (an anchor names a circle beyond it)",
+            expected: bad as usize + 1,
+            got: n_circles,
+        });
+    }
+    let mut frames = Vec::new();
+    circle_frames(motion, &mut frames);
+    vertex_kinematics_in_frames(anchors, &frames, pos, vel);
+    Ok(())
+}
+
+/// [`vertex_kinematics`] with the circle frames computed once ([`circle_frames`]).
+pub fn vertex_kinematics_in_frames(
+    anchors: &VertexAnchors,
+    frames: &[CircleFrame],
     pos: &mut [[f64; 2]],
     vel: &mut [[f64; 2]],
 ) {
@@ -160,24 +227,22 @@ pub fn vertex_kinematics(
         let x0 = anchors.reference[v];
         let (mut x, mut u) = ([0.0; 2], [0.0; 2]);
         for k in 0..n {
-            let i = anchors.circle[v][k] as usize;
-            let (c, r, phi) = (motion.centre[i], motion.radius[i], motion.rotation[i]);
-            let (s, co) = phi.sin_cos();
+            let f = &frames[anchors.circle[v][k] as usize];
             let o = anchors.offset[v][k];
-            let rel = [r * (co * o[0] - s * o[1]), r * (s * o[0] + co * o[1])];
-            let w = motion.angular_velocity[i];
-            let g = motion.radius_rate[i] / r;
-            let cv = motion.velocity[i];
-            x[0] += c[0] + rel[0];
-            x[1] += c[1] + rel[1];
-            u[0] += cv[0] - w * rel[1] + g * rel[0];
-            u[1] += cv[1] + w * rel[0] + g * rel[1];
+            let rel = [
+                f.r_cos * o[0] - f.r_sin * o[1],
+                f.r_sin * o[0] + f.r_cos * o[1],
+            ];
+            x[0] += f.centre[0] + rel[0];
+            x[1] += f.centre[1] + rel[1];
+            u[0] += f.velocity[0] - f.omega * rel[1] + f.growth * rel[0];
+            u[1] += f.velocity[1] + f.omega * rel[0] + f.growth * rel[1];
         }
-        if n > 0 {
+        if n > 1 {
             let inv = 1.0 / n as f64;
             x = [x[0] * inv, x[1] * inv];
             u = [u[0] * inv, u[1] * inv];
-        } else {
+        } else if n == 0 {
             x = x0;
         }
         match anchors.constraint[v] {
@@ -199,7 +264,24 @@ pub fn vertex_kinematics(
 
 /// Area rate dA/dt of every cell [m²/s] from the vertex velocities (exact derivative of the
 /// triangle area).
-pub fn cell_area_rate(mesh: &PoreMesh, vel: &[[f64; 2]], out: &mut [f64]) {
+pub fn cell_area_rate(mesh: &PoreMesh, vel: &[[f64; 2]], out: &mut [f64]) -> Result<(), MeshError> {
+    for (what, got, expected) in [
+        ("vel", vel.len(), mesh.vertices.len()),
+        ("out", out.len(), mesh.n_cells()),
+    ] {
+        if got != expected {
+            return Err(MeshError::LengthMismatch {
+                what,
+                expected,
+                got,
+            });
+        }
+    }
+    area_rate_into(mesh, vel, out);
+    Ok(())
+}
+
+fn area_rate_into(mesh: &PoreMesh, vel: &[[f64; 2]], out: &mut [f64]) {
     for (c, t) in mesh.cell_vertices.iter().enumerate() {
         let [a, b, cc] = t.map(|v| v as usize);
         let (pa, pb, pc) = (mesh.vertices[a], mesh.vertices[b], mesh.vertices[cc]);
@@ -215,7 +297,7 @@ pub fn cell_area_rate(mesh: &PoreMesh, vel: &[[f64; 2]], out: &mut [f64]) {
 /// Moves a [`PackingMesh`] with the circles between remeshes; holds only scratch buffers.
 #[derive(Debug, Clone, Default)]
 pub struct MeshMotion {
-    position: Vec<[f64; 2]>,
+    frames: Vec<CircleFrame>,
     velocity: Vec<[f64; 2]>,
     volume_rate: Vec<f64>,
 }
@@ -235,13 +317,24 @@ impl MeshMotion {
     ) -> Result<(), MeshError> {
         motion.validate(pm.circles.len())?;
         let nv = pm.anchors.len();
-        self.position.resize(nv, [0.0; 2]);
+        if pm.mesh.vertices.len() != nv {
+            return Err(MeshError::LengthMismatch {
+                what: "mesh vertices (against the vertex anchors)",
+                expected: nv,
+                got: pm.mesh.vertices.len(),
+            });
+        }
         self.velocity.resize(nv, [0.0; 2]);
-        vertex_kinematics(&pm.anchors, motion, &mut self.position, &mut self.velocity);
-        pm.mesh.vertices.copy_from_slice(&self.position);
+        circle_frames(motion, &mut self.frames);
+        vertex_kinematics_in_frames(
+            &pm.anchors,
+            &self.frames,
+            &mut pm.mesh.vertices,
+            &mut self.velocity,
+        );
         pm.mesh.update_geometry();
         self.volume_rate.resize(pm.mesh.n_cells(), 0.0);
-        cell_area_rate(&pm.mesh, &self.velocity, &mut self.volume_rate);
+        area_rate_into(&pm.mesh, &self.velocity, &mut self.volume_rate);
         let t = pm.mesh.thickness;
         for r in self.volume_rate.iter_mut() {
             *r *= t;

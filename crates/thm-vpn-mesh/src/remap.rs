@@ -144,6 +144,11 @@ impl RemapOperator {
             h = 1.0;
         }
         let span = [(hi[0] - lo[0]).max(0.0), (hi[1] - lo[1]).max(0.0)];
+        // At most about four bins per cell.
+        let min_h = (span[0] * span[1] / (4.0 * nn.max(1) as f64)).sqrt();
+        if min_h.is_finite() && h < min_h {
+            h = min_h;
+        }
         let nx = ((span[0] / h) as usize + 1).clamp(1, 4096);
         let ny = ((span[1] / h) as usize + 1).clamp(1, 4096);
         let hx = (span[0] / nx as f64).max(f64::MIN_POSITIVE);
@@ -189,46 +194,94 @@ impl RemapOperator {
             let (.., a, b) = bin_range(&tri_points(new, c));
             new_bbox.push((a, b));
         }
-        // Old cells against the bins.
-        let no = old.n_cells();
-        let mut offsets = Vec::with_capacity(no + 1);
-        offsets.push(0u32);
-        let mut target = Vec::with_capacity(no * 4);
-        let mut area = Vec::with_capacity(no * 4);
-        let mut stamp = vec![NONE; nn];
-        for o in 0..no {
-            let p = tri_points(old, o);
-            if nn > 0 {
-                let (x0, x1, y0, y1, a, b) = bin_range(&p);
-                for y in y0..=y1 {
-                    for x in x0..=x1 {
-                        let bin = y * nx + x;
-                        for &c in &items[start[bin] as usize..start[bin + 1] as usize] {
-                            if stamp[c as usize] == o as u32 {
-                                continue;
-                            }
-                            stamp[c as usize] = o as u32;
-                            let (ca, cb) = new_bbox[c as usize];
-                            if ca[0] > b[0] || cb[0] < a[0] || ca[1] > b[1] || cb[1] < a[1] {
-                                continue;
-                            }
-                            let ov = triangle_overlap_area(&p, &tri_points(new, c as usize));
-                            if ov > 0.0 {
-                                target.push(c);
-                                area.push(ov);
-                            }
-                        }
-                    }
-                }
-            }
-            offsets.push(target.len() as u32);
-        }
         let mut new_adjacency = vec![[NONE; 3]; nn];
         for (c, faces) in new.cell_faces.iter().enumerate() {
             for k in 0..3 {
                 let [a, b] = new.face_cells[faces[k] as usize];
                 new_adjacency[c][k] = if a == c as u32 { b } else { a };
             }
+        }
+        // Old cells: seed with the new cell holding the old centroid, then walk across faces
+        // while the overlap is positive (the new cells meeting a convex old cell form an
+        // edge-connected set). If no new cell holds the centroid, test every binned candidate.
+        let no = old.n_cells();
+        let mut offsets = Vec::with_capacity(no + 1);
+        offsets.push(0u32);
+        let mut target = Vec::with_capacity(no * 6);
+        let mut area = Vec::with_capacity(no * 6);
+        let mut stamp = vec![NONE; nn];
+        let mut stack: Vec<u32> = Vec::with_capacity(64);
+        let contains = |t: &[[f64; 2]; 3], g: [f64; 2]| {
+            (0..3).all(|k| {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                (b[0] - a[0]) * (g[1] - a[1]) - (b[1] - a[1]) * (g[0] - a[0]) >= 0.0
+            })
+        };
+        for o in 0..no {
+            let p = tri_points(old, o);
+            let tag = o as u32;
+            if nn > 0 {
+                let g = [
+                    (p[0][0] + p[1][0] + p[2][0]) / 3.0,
+                    (p[0][1] + p[1][1] + p[2][1]) / 3.0,
+                ];
+                let (gx, _, gy, ..) = bin_range(&[g, g, g]);
+                let bin = gy * nx + gx;
+                let seed = items[start[bin] as usize..start[bin + 1] as usize]
+                    .iter()
+                    .copied()
+                    .find(|&c| contains(&tri_points(new, c as usize), g));
+                match seed {
+                    Some(s) => {
+                        let (.., a, b) = bin_range(&p);
+                        stamp[s as usize] = tag;
+                        stack.push(s);
+                        while let Some(c) = stack.pop() {
+                            let (ca, cb) = new_bbox[c as usize];
+                            if ca[0] >= b[0] || cb[0] <= a[0] || ca[1] >= b[1] || cb[1] <= a[1] {
+                                continue;
+                            }
+                            let ov = triangle_overlap_area(&p, &tri_points(new, c as usize));
+                            if ov > 0.0 {
+                                target.push(c);
+                                area.push(ov);
+                                for &n in &new_adjacency[c as usize] {
+                                    if n != NONE && stamp[n as usize] != tag {
+                                        stamp[n as usize] = tag;
+                                        stack.push(n);
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    None => {
+                        let (x0, x1, y0, y1, a, b) = bin_range(&p);
+                        for y in y0..=y1 {
+                            for x in x0..=x1 {
+                                let bin = y * nx + x;
+                                for &c in &items[start[bin] as usize..start[bin + 1] as usize] {
+                                    if stamp[c as usize] == tag {
+                                        continue;
+                                    }
+                                    stamp[c as usize] = tag;
+                                    let (ca, cb) = new_bbox[c as usize];
+                                    if ca[0] > b[0] || cb[0] < a[0] || ca[1] > b[1] || cb[1] < a[1]
+                                    {
+                                        continue;
+                                    }
+                                    let ov =
+                                        triangle_overlap_area(&p, &tri_points(new, c as usize));
+                                    if ov > 0.0 {
+                                        target.push(c);
+                                        area.push(ov);
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            offsets.push(target.len() as u32);
         }
         Ok(Self {
             offsets,
@@ -264,12 +317,18 @@ impl RemapOperator {
     }
 
     /// Breadth-first search from `seeds` for the nearest admissible cell.
-    fn nearest(&self, seeds: &[u32], ok: impl Fn(u32) -> bool, from: [f64; 2]) -> u32 {
-        let mut seen = vec![false; self.new_kind.len()];
+    fn nearest(
+        &self,
+        seeds: &[u32],
+        ok: impl Fn(u32) -> bool,
+        from: [f64; 2],
+        seen: &mut [u32],
+        tag: u32,
+    ) -> u32 {
         let mut layer: VecDeque<u32> = VecDeque::new();
         for &s in seeds {
-            if !seen[s as usize] {
-                seen[s as usize] = true;
+            if seen[s as usize] != tag {
+                seen[s as usize] = tag;
                 layer.push_back(s);
             }
         }
@@ -290,8 +349,8 @@ impl RemapOperator {
             let mut next = VecDeque::new();
             for &c in &layer {
                 for &n in &self.new_adjacency[c as usize] {
-                    if n != NONE && !seen[n as usize] {
-                        seen[n as usize] = true;
+                    if n != NONE && seen[n as usize] != tag {
+                        seen[n as usize] = tag;
                         next.push_back(n);
                     }
                 }
@@ -334,6 +393,8 @@ impl RemapOperator {
             }
         }
         new_values.fill(0.0);
+        let mut seen = vec![NONE; nn];
+        let mut searches = 0u32;
         for (o, &q) in old_values.iter().enumerate() {
             if q == 0.0 {
                 continue;
@@ -386,10 +447,13 @@ impl RemapOperator {
             }
             let mut cell = NONE;
             for strict in [true, false] {
+                searches += 1;
                 cell = self.nearest(
                     &seeds,
                     |c| self.admissible(filter, ok_kind, self.new_kind[c as usize], strict),
                     from,
+                    &mut seen,
+                    searches,
                 );
                 if cell != NONE {
                     break;

@@ -341,7 +341,11 @@ fn rest_state_is_the_reference() {
     let st = State::at(&cs, &vec![([0.0; 2], 0.0, 0.0); cs.len()], 0.0);
     let n = pm.anchors.len();
     let (mut p, mut v) = (vec![[0.0; 2]; n], vec![[0.0; 2]; n]);
-    vertex_kinematics(&pm.anchors, &st.motion(), &mut p, &mut v);
+    vertex_kinematics(&pm.anchors, cs.len(), &st.motion(), &mut p, &mut v).unwrap();
+    assert!(matches!(
+        vertex_kinematics(&pm.anchors, cs.len() + 1, &st.motion(), &mut p, &mut v),
+        Err(MeshError::LengthMismatch { .. })
+    ));
     for (a, b) in p.iter().zip(&pm.mesh.vertices) {
         assert!((a[0] - b[0]).abs() < 1e-17 && (a[1] - b[1]).abs() < 1e-17);
     }
