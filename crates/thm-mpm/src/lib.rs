@@ -46,9 +46,11 @@
 //! SI throughout (temperature in K or °C, only differences matter). 2D, unit thickness
 //! (masses in kg per metre, forces in N per metre). Explicit: Δt below both limits. uGIMP
 //! domains do not deform, so very large distortion of a point's domain is not represented
-//! (CPDI is out of scope, as in the paper). Nodes lighter than 1e-12 of the heaviest point are
-//! treated as empty (no velocity), which keeps far-edge GIMP weights from producing huge
-//! accelerations; this breaks momentum conservation only at that relative level.
+//! (CPDI is out of scope, as in the paper). Only nodes with zero mass are treated as empty:
+//! no force is ever dropped, so momentum balance holds to round-off (nearly empty nodes at the
+//! edge of a GIMP support get large accelerations, but points see them weighted by
+//! `φ_Ip ∝ M_I`). A point's domain must stay inside the grid: pad the grid by a cell where
+//! material sits on a grid side that it could cross.
 //!
 //! ## Choices where the paper is ambiguous or garbled
 //!
