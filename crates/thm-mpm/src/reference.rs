@@ -357,9 +357,9 @@ pub fn thermoelastic_plate_fd(
             let ts = sample_times[next];
             let f = ((ts - prev.0) / dt).clamp(0.0, 1.0);
             out.time.push(ts);
-            for k in 0..probes.len() {
-                out.sxx[k].push((1.0 - f) * prev.1[k].0 + f * now[k].0);
-                out.syy[k].push((1.0 - f) * prev.1[k].1 + f * now[k].1);
+            for (k, (p, q)) in prev.1.iter().zip(&now).enumerate() {
+                out.sxx[k].push((1.0 - f) * p.0 + f * q.0);
+                out.syy[k].push((1.0 - f) * p.1 + f * q.1);
             }
             next += 1;
         }
