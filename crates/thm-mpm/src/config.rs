@@ -63,8 +63,9 @@ impl MpmParameters {
     }
 }
 
-/// Validated parameters. Construct with [`MpmConfig::new`].
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// Validated parameters. Construct with [`MpmConfig::new`]; serialisable for the record, but
+/// not deserialisable (rebuild it from [`MpmParameters`], which validates).
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MpmConfig {
     pub(crate) grid: Grid,
     pub(crate) params: MpmParameters,

@@ -17,7 +17,7 @@ pub struct GridParameters {
 
 /// A validated regular grid. Node `(i, j)` sits at `origin + (i, j) · cell_size` and has the
 /// flat index `j · nodes[0] + i`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Grid {
     origin: [f64; 2],
     cell_size: f64,

@@ -87,7 +87,7 @@ pub struct ThermoElasticParameters {
 ///
 /// with `λ = Eν/((1+ν)(1−2ν))`, `G = E/(2(1+ν))`, `W = skew(L)`. `I₂` is the in-plane unit
 /// tensor (the literal reading of B-Eq. 51 in 2D; see the crate docs).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct LinearThermoElastic {
     lambda: f64,
     shear_modulus: f64,
@@ -198,7 +198,7 @@ impl Constitutive for LinearThermoElastic {
 
 /// A material with no stiffness: zero stress, constant conductivity. Pure heat conduction in
 /// a medium that flows freely, and the cheapest possible constitutive call (benchmarks).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct StresslessConductor {
     conductivity: Sym2,
 }
@@ -265,7 +265,7 @@ pub struct DruckerPragerState {
 /// Elastic predictor with the Jaumann rate, radial return to the cone, or to the apex where
 /// the return overshoots it. A second example of the [`Constitutive`] seam (granular column
 /// collapse, silos).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct DruckerPrager {
     lambda: f64,
     shear_modulus: f64,

@@ -45,18 +45,37 @@ pub struct Axis3 {
     pub g: [f64; 3],
 }
 
+/// `gimp_1d` with the reciprocals `1/h` and `1/(h l_p)` precomputed (hot loop form).
+#[inline(always)]
+fn gimp_1d_fast(d: f64, h: f64, lp: f64, inv_h: f64, inv_hlp: f64) -> (f64, f64) {
+    let a = d.abs();
+    let s = d.signum();
+    if a < lp {
+        (1.0 - 0.5 * (d * d + lp * lp) * inv_hlp, -d * inv_hlp)
+    } else if a < h - lp {
+        (1.0 - a * inv_h, -s * inv_h)
+    } else if a < h + lp {
+        let r = h + lp - a;
+        (0.25 * r * r * inv_hlp, -0.5 * s * r * inv_hlp)
+    } else {
+        (0.0, 0.0)
+    }
+}
+
 /// 1D weights along one axis. `nodes` is the number of nodes along the axis (≥ 3); the caller
 /// guarantees `x0 + lp ≤ xp ≤ x0 + (nodes−1) h − lp`, so clamping `base` loses no weight.
 #[inline]
 pub fn axis3(xp: f64, x0: f64, h: f64, lp: f64, nodes: usize) -> Axis3 {
-    let r = ((xp - x0) / h + 0.5).floor() - 1.0;
+    let inv_h = 1.0 / h;
+    let inv_hlp = inv_h / lp;
+    let r = ((xp - x0) * inv_h + 0.5).floor() - 1.0;
     let max_base = (nodes - 3) as f64;
     let base = r.clamp(0.0, max_base) as usize;
     let mut w = [0.0; 3];
     let mut g = [0.0; 3];
+    let d0 = xp - (x0 + base as f64 * h);
     for k in 0..3 {
-        let xi = x0 + (base + k) as f64 * h;
-        let (wk, gk) = gimp_1d(xp - xi, h, lp);
+        let (wk, gk) = gimp_1d_fast(d0 - k as f64 * h, h, lp, inv_h, inv_hlp);
         w[k] = wk;
         g[k] = gk;
     }
