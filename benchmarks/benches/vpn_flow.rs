@@ -56,7 +56,7 @@ fn bench(c: &mut Criterion) {
         // iterations and every call stays one sub-step (asserted).
         let dt = 0.25
             * pool
-                .install(|| stepper.stable_substep(&net, &mut state, &fluid))
+                .install(|| stepper.stable_substep(&net, &state, &fluid))
                 .expect("limit")
                 .dt;
         c.bench_function(

@@ -112,6 +112,39 @@ pub fn two_layer_flow(
     }
 }
 
+/// The layer flow rates per unit width and unit pressure gradient, `(Q_q/G, Q_p/G)`
+/// [m³/(Pa·s)], of a channel of aperture `h` holding a liquid layer `α_q h`: the same closed
+/// form as [`two_layer_flow`] without the shear stresses, with fast single-phase paths
+/// (`h³/(12 μ)` for the phase that fills the channel).
+#[inline]
+pub fn two_layer_conductances(
+    aperture: f64,
+    liquid_fraction: f64,
+    liquid_viscosity: f64,
+    gas_viscosity: f64,
+) -> (f64, f64) {
+    let h = aperture;
+    if h <= 0.0 {
+        return (0.0, 0.0);
+    }
+    let h3 = h * h * h / 12.0;
+    if liquid_fraction >= 1.0 {
+        return (h3 / liquid_viscosity, 0.0);
+    }
+    if liquid_fraction <= 0.0 {
+        return (0.0, h3 / gas_viscosity);
+    }
+    let (mq, mp) = (liquid_viscosity, gas_viscosity);
+    let a = liquid_fraction * h;
+    let b = h - a;
+    let coef_a = (a * a * mp / mq + b * (2.0 * a + b)) / (2.0 * (a * mp + b * mq));
+    let coef_b = (mq * coef_a - h) / mp;
+    (
+        -a * a * a / (6.0 * mq) + 0.5 * coef_a * a * a,
+        -b * b * b / (6.0 * mp) - 0.5 * coef_b * b * b,
+    )
+}
+
 /// Total volumetric conductance per unit width `(Q_q + Q_p)/G` [m³/(Pa·s)] of a channel of
 /// aperture `h` holding a liquid layer `α_q h`. It decreases monotonically with `α_q` when
 /// `μ_q ≥ μ_p`, from `h³/(12 μ_p)` to `h³/(12 μ_q)`.
@@ -121,14 +154,9 @@ pub fn two_layer_conductance(
     liquid_viscosity: f64,
     gas_viscosity: f64,
 ) -> f64 {
-    let f = two_layer_flow(
-        aperture,
-        liquid_fraction,
-        1.0,
-        liquid_viscosity,
-        gas_viscosity,
-    );
-    f.liquid_flow_rate + f.gas_flow_rate
+    let (cq, cp) =
+        two_layer_conductances(aperture, liquid_fraction, liquid_viscosity, gas_viscosity);
+    cq + cp
 }
 
 #[cfg(test)]
@@ -231,6 +259,18 @@ mod tests {
         let f = two_layer_flow(h, 1.0, g, MU_WATER, MU_AIR);
         assert_eq!(f.gas_flow_rate, 0.0);
         assert!((f.liquid_flow_rate / poiseuille_flow_rate(h, g, MU_WATER) - 1.0).abs() < 1e-13);
+    }
+
+    #[test]
+    fn conductances_are_the_flow_rates_at_unit_gradient() {
+        for k in 0..=10 {
+            let alpha = k as f64 / 10.0;
+            let f = two_layer_flow(2e-6, alpha, 1.0, MU_WATER, MU_AIR);
+            let (cq, cp) = two_layer_conductances(2e-6, alpha, MU_WATER, MU_AIR);
+            let scale = poiseuille_flow_rate(2e-6, 1.0, MU_AIR);
+            assert!((cq - f.liquid_flow_rate).abs() <= 1e-14 * scale);
+            assert!((cp - f.gas_flow_rate).abs() <= 1e-14 * scale);
+        }
     }
 
     #[test]

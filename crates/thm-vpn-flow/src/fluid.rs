@@ -90,6 +90,10 @@ pub struct LinearLiquidIdealGas {
     /// `ρ_q = a + b P`.
     a: f64,
     b: f64,
+    /// `1/b = K/ρ₀`.
+    inv_b: f64,
+    /// `R/w_p`.
+    r_over_w: f64,
 }
 
 impl LinearLiquidIdealGas {
@@ -138,7 +142,13 @@ impl LinearLiquidIdealGas {
         )?;
         let b = p.liquid_reference_density / p.liquid_bulk_modulus;
         let a = p.liquid_reference_density - b * p.liquid_reference_pressure;
-        Ok(Self { p, a, b })
+        Ok(Self {
+            p,
+            a,
+            b,
+            inv_b: p.liquid_bulk_modulus / p.liquid_reference_density,
+            r_over_w: p.gas_constant / p.gas_molar_mass,
+        })
     }
 
     /// The parameters.
@@ -151,7 +161,7 @@ impl LinearLiquidIdealGas {
     }
 
     fn gas_density_at(&self, pressure: f64, temperature: f64) -> f64 {
-        pressure * self.p.gas_molar_mass / (self.p.gas_constant * temperature)
+        pressure / (self.r_over_w * temperature)
     }
 }
 
@@ -186,7 +196,7 @@ impl PoreFluid for LinearLiquidIdealGas {
                 return Err(ClosureFailure::Empty);
             }
             let rho = liquid_mass / volume;
-            let pressure = (rho - self.a) / self.b;
+            let pressure = (rho - self.a) * self.inv_b;
             if pressure <= 0.0 {
                 return Err(ClosureFailure::NoSolution {
                     reason: "pure liquid below zero pressure (pressure in Pa)",
@@ -200,7 +210,7 @@ impl PoreFluid for LinearLiquidIdealGas {
                 gas_density: self.gas_density_at(pressure, temperature),
             });
         }
-        let g = gas_mass * self.p.gas_constant * temperature / self.p.gas_molar_mass;
+        let g = gas_mass * self.r_over_w * temperature;
         if liquid_mass == 0.0 {
             let pressure = g / volume;
             return Ok(PoreState {
@@ -277,9 +287,9 @@ impl PoreFluid for LinearLiquidIdealGas {
     fn bulk_modulus(&self, phase: Phase, density: f64, temperature: f64) -> f64 {
         match phase {
             // K = ρ dP/dρ = ρ / b.
-            Phase::Liquid => density / self.b,
+            Phase::Liquid => density * self.inv_b,
             // P = ρ R T / w ⇒ K = P.
-            Phase::Gas => density * self.p.gas_constant * temperature / self.p.gas_molar_mass,
+            Phase::Gas => density * self.r_over_w * temperature,
         }
     }
 }

@@ -41,7 +41,7 @@ fn single_channel_rate_is_poiseuille_times_width() {
     )
     .unwrap();
     let mut stepper = FlowStepper::new(config());
-    let limit = stepper.stable_substep(&net, &mut state, &fluid).unwrap();
+    let limit = stepper.stable_substep(&net, &state, &fluid).unwrap();
     let f = stepper.channel_fluxes()[0];
     let g = (state.pressure[0] - state.pressure[1]) / 2e-3;
     let expected = state.liquid_density[0] * poiseuille_flow_rate(3e-6, g, 10.02e-4) * 8e-3;
