@@ -135,13 +135,14 @@ pub fn two_layer_conductances(
         return (0.0, h3 / gas_viscosity);
     }
     let (mq, mp) = (liquid_viscosity, gas_viscosity);
+    let (inv_mq, inv_mp) = (1.0 / mq, 1.0 / mp);
     let a = liquid_fraction * h;
     let b = h - a;
-    let coef_a = (a * a * mp / mq + b * (2.0 * a + b)) / (2.0 * (a * mp + b * mq));
-    let coef_b = (mq * coef_a - h) / mp;
+    let coef_a = (a * a * mp * inv_mq + b * (2.0 * a + b)) / (2.0 * (a * mp + b * mq));
+    let coef_b = (mq * coef_a - h) * inv_mp;
     (
-        -a * a * a / (6.0 * mq) + 0.5 * coef_a * a * a,
-        -b * b * b / (6.0 * mp) - 0.5 * coef_b * b * b,
+        a * a * (0.5 * coef_a - a * inv_mq / 6.0),
+        -b * b * (b * inv_mp / 6.0 + 0.5 * coef_b),
     )
 }
 
