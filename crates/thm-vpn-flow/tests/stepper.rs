@@ -394,6 +394,8 @@ fn pressure_forces_balance_on_a_sphere_in_uniform_pressure_and_shear_carries_the
     .unwrap();
     let net = Network::from_mesh(&mesh, &[], 0.01).unwrap();
     assert!(!net.parts().wall_pore.is_empty());
+    assert!(net.parts().wall_sphere.iter().all(|&s| s == 0));
+    assert_eq!(net.n_pores(), 72 - 8);
     let fluid = water_air();
     let n = net.n_pores();
     let state = FlowState::from_pressure(
@@ -454,6 +456,14 @@ fn mesh_network_has_links_only_on_sides_with_conditions() {
     assert!((net.group_face_length()[0] - 4e-3).abs() < 1e-15);
     assert_eq!(net.n_pores(), 64);
     assert_eq!(net.n_channels(), mesh.channels.len());
+    // Per-cell values map to pores through the fluid cells.
+    let cell_values: Vec<f64> = (0..mesh.n_cells()).map(|c| c as f64).collect();
+    let mut pore_values = vec![0.0; net.n_pores()];
+    net.cells_to_pores(&cell_values, &mut pore_values).unwrap();
+    for (p, &c) in net.pore_cell().iter().enumerate() {
+        assert_eq!(pore_values[p], c as f64);
+        assert!(mesh.cell_kind[c as usize].is_fluid());
+    }
 }
 
 #[test]
