@@ -286,6 +286,31 @@ mod tests {
         assert!((last - h.powi(3) / (12.0 * MU_WATER)).abs() < 1e-12 * last);
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+        #[test]
+        fn walls_balance_the_pressure_drop_and_flow_lies_between_the_single_phase_limits(
+            h in 1e-7f64..1e-4,
+            alpha in 0.0f64..=1.0,
+            g in -1e9f64..1e9,
+            mq in 1e-5f64..1e-2,
+            ratio in 1.0f64..100.0,
+        ) {
+            let mp = mq / ratio;
+            let f = two_layer_flow(h, alpha, g, mq, mp);
+            let scale = (g * h).abs().max(f64::MIN_POSITIVE);
+            proptest::prop_assert!(
+                (f.liquid_wall_shear + f.gas_wall_shear - g * h).abs() <= 1e-11 * scale
+            );
+            let total = f.liquid_flow_rate + f.gas_flow_rate;
+            let (slow, fast) = (poiseuille_flow_rate(h, g, mq), poiseuille_flow_rate(h, g, mp));
+            let tol = 1e-12 * fast.abs();
+            proptest::prop_assert!(total.abs() >= slow.abs() - tol && total.abs() <= fast.abs() + tol);
+            // Each layer flows down the gradient.
+            proptest::prop_assert!(f.liquid_flow_rate * g >= 0.0 && f.gas_flow_rate * g >= 0.0);
+        }
+    }
+
     #[test]
     fn reversing_the_gradient_reverses_the_flow() {
         let a = two_layer_flow(1e-6, 0.3, 5e6, MU_WATER, MU_AIR);

@@ -323,6 +323,33 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(300))]
+        #[test]
+        fn closure_conserves_both_masses_for_any_pore(
+            liquid_mass in 0.0f64..2e-6,
+            gas_mass in 0.0f64..1e-7,
+            volume in 1e-10f64..1e-8,
+            temperature in 250.0f64..400.0,
+        ) {
+            let m = model();
+            match m.close(liquid_mass, gas_mass, volume, temperature) {
+                Ok(s) => {
+                    proptest::prop_assert!((0.0..=1.0).contains(&s.liquid_fraction));
+                    proptest::prop_assert!(s.pressure > 0.0);
+                    let mq = s.liquid_fraction * s.liquid_density * volume;
+                    let mp = (1.0 - s.liquid_fraction) * s.gas_density * volume;
+                    proptest::prop_assert!((mq - liquid_mass).abs() <= 1e-12 * liquid_mass.max(1e-30));
+                    proptest::prop_assert!((mp - gas_mass).abs() <= 1e-12 * gas_mass.max(1e-30));
+                }
+                // Only an empty pore or stretched pure liquid have no solution.
+                Err(ClosureFailure::Empty) => proptest::prop_assert!(liquid_mass == 0.0 && gas_mass == 0.0),
+                Err(ClosureFailure::NoSolution { .. }) => proptest::prop_assert!(gas_mass == 0.0),
+                Err(e) => proptest::prop_assert!(false, "{e}"),
+            }
+        }
+    }
+
     #[test]
     fn single_phase_limits() {
         let m = model();
