@@ -165,6 +165,26 @@ impl LinearLiquidIdealGas {
     }
 }
 
+/// The error for closure inputs outside their ranges (the first offending one).
+#[cold]
+fn invalid_input(liquid_mass: f64, gas_mass: f64, volume: f64, temperature: f64) -> ClosureFailure {
+    if !(liquid_mass.is_finite() && liquid_mass >= 0.0) {
+        ClosureFailure::NegativeMass {
+            phase: Phase::Liquid,
+            value: liquid_mass,
+        }
+    } else if !(gas_mass.is_finite() && gas_mass >= 0.0) {
+        ClosureFailure::NegativeMass {
+            phase: Phase::Gas,
+            value: gas_mass,
+        }
+    } else if !(volume.is_finite() && volume > 0.0) {
+        ClosureFailure::NonPositiveVolume { value: volume }
+    } else {
+        ClosureFailure::NonPositiveTemperature { value: temperature }
+    }
+}
+
 impl PoreFluid for LinearLiquidIdealGas {
     fn close(
         &self,
@@ -173,23 +193,14 @@ impl PoreFluid for LinearLiquidIdealGas {
         volume: f64,
         temperature: f64,
     ) -> Result<PoreState, ClosureFailure> {
-        if !(liquid_mass.is_finite() && liquid_mass >= 0.0) {
-            return Err(ClosureFailure::NegativeMass {
-                phase: Phase::Liquid,
-                value: liquid_mass,
-            });
-        }
-        if !(gas_mass.is_finite() && gas_mass >= 0.0) {
-            return Err(ClosureFailure::NegativeMass {
-                phase: Phase::Gas,
-                value: gas_mass,
-            });
-        }
-        if !(volume.is_finite() && volume > 0.0) {
-            return Err(ClosureFailure::NonPositiveVolume { value: volume });
-        }
-        if !(temperature.is_finite() && temperature > 0.0) {
-            return Err(ClosureFailure::NonPositiveTemperature { value: temperature });
+        let inputs_valid = (0.0..f64::INFINITY).contains(&liquid_mass)
+            && (0.0..f64::INFINITY).contains(&gas_mass)
+            && volume > 0.0
+            && volume < f64::INFINITY
+            && temperature > 0.0
+            && temperature < f64::INFINITY;
+        if !inputs_valid {
+            return Err(invalid_input(liquid_mass, gas_mass, volume, temperature));
         }
         if gas_mass == 0.0 {
             if liquid_mass == 0.0 {

@@ -302,8 +302,8 @@ pub fn gather_pore_rates(
         pore: usize::MAX,
         max_reynolds: 0.0,
     };
-    // The smaller limit (ties: the smaller pore index) and the larger Reynolds number:
-    // both order-independent, so the reduction is deterministic.
+    // Across chunks: the smaller limit (ties: the smaller pore index) and the larger Reynolds
+    // number, both order-independent, so the reduction is deterministic.
     let better = |a: SubstepLimit, b: SubstepLimit| {
         let max_reynolds = a.max_reynolds.max(b.max_reynolds);
         let mut m = if b.dt < a.dt || (b.dt == a.dt && b.pore < a.pore) {
@@ -313,12 +313,6 @@ pub fn gather_pore_rates(
         };
         m.max_reynolds = max_reynolds;
         m
-    };
-    let candidate = |dt: f64, limit: StepLimit, pore: usize| SubstepLimit {
-        dt,
-        limit,
-        pore,
-        max_reynolds: 0.0,
     };
     out.par_chunks_mut(CHUNK)
         .enumerate()
@@ -368,17 +362,29 @@ pub fn gather_pore_rates(
                         liquid: lq,
                         gas: lp,
                     };
+                    // Candidates in a fixed order; a strict `<` keeps the first (and, across
+                    // pores of the chunk, the smallest) index on ties.
                     let a = state.pressure_stiffness[p] * cond;
-                    if a > 0.0 {
-                        best = better(best, candidate(s_stab / a, StepLimit::Stability, p));
+                    if a > 0.0 && s_stab / a < best.dt {
+                        best.dt = s_stab / a;
+                        best.limit = StepLimit::Stability;
+                        best.pore = p;
                     }
                     if lq < 0.0 {
                         let dt = s_pos * state.liquid_mass[p] / -lq;
-                        best = better(best, candidate(dt, StepLimit::LiquidPositivity, p));
+                        if dt < best.dt {
+                            best.dt = dt;
+                            best.limit = StepLimit::LiquidPositivity;
+                            best.pore = p;
+                        }
                     }
                     if lp < 0.0 {
                         let dt = s_pos * state.gas_mass[p] / -lp;
-                        best = better(best, candidate(dt, StepLimit::GasPositivity, p));
+                        if dt < best.dt {
+                            best.dt = dt;
+                            best.limit = StepLimit::GasPositivity;
+                            best.pore = p;
+                        }
                     }
                 }
                 Ok(best)
