@@ -130,9 +130,10 @@ pub fn channel_fluxes(
         });
 }
 
-/// Flux of one channel or link from its upwind state; `alpha_min` is the smaller liquid
-/// fraction of the two ends (the conductance is largest there, since `μ_q ≥ μ_p` is not
-/// assumed the bound takes the larger of the two end values).
+/// Flux of one channel or link from its upwind state (`alpha_up`, `rho_q`, `rho_p`).
+/// `alpha_other` is the liquid fraction of the other end: the conductance bound is the larger
+/// of the total conductances at the two ends' fractions, so it holds whichever way the flow
+/// turns during the sub-step (the conductance is monotone in `α_q`, `μ_q ≥ μ_p` not assumed).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn pipe_flux(
