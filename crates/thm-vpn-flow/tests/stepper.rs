@@ -5,6 +5,8 @@ mod common;
 
 use common::{config, random_closed_network, water_air};
 use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use thm_vpn_flow::channel::{poiseuille_flow_rate, two_layer_flow};
 use thm_vpn_flow::stepper::{ChannelFlux, channel_fluxes};
 use thm_vpn_flow::{
@@ -91,17 +93,11 @@ fn check_conservation(seed: u64, n: usize, steps: usize, volume_rate_scale: f64)
     let mut stepper = FlowStepper::new(config());
     let (q0, p0) = (state.total_liquid_mass(), state.total_gas_mass());
     let gas_start = state.gas_mass.clone();
-    // Moving walls: dV/dt of alternating sign, small enough to keep pure-liquid pores in
+    // Moving walls: a random dV/dt per pore, small enough to keep pure-liquid pores in
     // compression.
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);
     let dv_dt: Vec<f64> = (0..n)
-        .map(|i| {
-            let s = if (i as u64 + seed).is_multiple_of(2) {
-                1.0
-            } else {
-                -1.0
-            };
-            s * volume_rate_scale * state.volume[i]
-        })
+        .map(|i| rng.random_range(-1.0..1.0) * volume_rate_scale * state.volume[i])
         .collect();
     for _ in 0..steps {
         stepper
@@ -129,7 +125,7 @@ proptest! {
     fn mass_per_phase_is_conserved_on_closed_networks_with_moving_walls(
         seed in 0u64..1_000_000,
         n in 3usize..60,
-        rate in -1e-3f64..1e-3,
+        rate in 0.0f64..1e-3,
     ) {
         check_conservation(seed, n, 5, rate);
     }
