@@ -641,6 +641,9 @@ impl FlowStepper {
     /// Advances `state` by the outer step `dt` \[s\], sub-cycling with the stable sub-step.
     /// `dv_dt` is `dV/dt` of every pore [m³/s] from the solid motion, constant over the outer
     /// step (empty: rigid pores).
+    ///
+    /// On error the state is left where the failure happened (possibly part-way through a
+    /// sub-step): restore it from a saved copy before retrying with a smaller step.
     pub fn step(
         &mut self,
         network: &Network,
