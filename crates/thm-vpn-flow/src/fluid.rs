@@ -43,8 +43,14 @@ pub trait PoreFluid: Sync {
     -> Result<f64, ClosureFailure>;
 
     /// Isothermal bulk modulus `K = ρ ∂P/∂ρ` \[Pa\] of one phase at `density` and `temperature`
-    /// (used for the stable time step).
-    fn bulk_modulus(&self, phase: Phase, density: f64, temperature: f64) -> f64;
+    /// (used for the stable time step). Must be finite and positive on the phase's stable
+    /// branch; an error stops the step naming the pore.
+    fn bulk_modulus(
+        &self,
+        phase: Phase,
+        density: f64,
+        temperature: f64,
+    ) -> Result<f64, ClosureFailure>;
 }
 
 /// Parameters of [`LinearLiquidIdealGas`] (serde, validated by
@@ -295,13 +301,18 @@ impl PoreFluid for LinearLiquidIdealGas {
         }
     }
 
-    fn bulk_modulus(&self, phase: Phase, density: f64, temperature: f64) -> f64 {
-        match phase {
+    fn bulk_modulus(
+        &self,
+        phase: Phase,
+        density: f64,
+        temperature: f64,
+    ) -> Result<f64, ClosureFailure> {
+        Ok(match phase {
             // K = ρ dP/dρ = ρ / b.
             Phase::Liquid => density * self.inv_b,
             // P = ρ R T / w ⇒ K = P.
             Phase::Gas => density * self.r_over_w * temperature,
-        }
+        })
     }
 }
 

@@ -461,13 +461,16 @@ pub fn advance_and_close(
                     ));
                 }
                 let t = temperature[i];
-                match fluid.close(mq[k], mp[k], v[k], t) {
-                    Ok(s) => {
+                let closed = fluid
+                    .close(mq[k], mp[k], v[k], t)
+                    .and_then(|s| Ok((s, mixture_stiffness(fluid, &s, t, v[k])?)));
+                match closed {
+                    Ok((s, stiffness)) => {
                         a[k] = s.liquid_fraction;
                         p[k] = s.pressure;
                         rq[k] = s.liquid_density;
                         rp[k] = s.gas_density;
-                        st[k] = mixture_stiffness(fluid, &s, t, v[k]);
+                        st[k] = stiffness;
                     }
                     Err(cause) => {
                         return Some((
@@ -481,18 +484,27 @@ pub fn advance_and_close(
                         ));
                     }
                 }
-                if !p[k].is_finite() {
-                    return Some((
-                        i,
-                        FlowError::NonFinite {
-                            quantity: "pressure",
-                            place: "pore",
-                            index: i,
-                            value: p[k],
-                            step,
-                            substep,
-                        },
-                    ));
+                for (quantity, value, ok) in [
+                    ("pressure", p[k], p[k].is_finite()),
+                    (
+                        "pressure stiffness",
+                        st[k],
+                        st[k].is_finite() && st[k] > 0.0,
+                    ),
+                ] {
+                    if !ok {
+                        return Some((
+                            i,
+                            FlowError::NonFinite {
+                                quantity,
+                                place: "pore",
+                                index: i,
+                                value,
+                                step,
+                                substep,
+                            },
+                        ));
+                    }
                 }
             }
             None
@@ -504,21 +516,22 @@ pub fn advance_and_close(
     }
 }
 
+/// `K/V` of a pore's mixture, `1/K = α_q/K_q + α_p/K_p`.
 fn mixture_stiffness(
     fluid: &impl PoreFluid,
     s: &crate::fluid::PoreState,
     temperature: f64,
     volume: f64,
-) -> f64 {
+) -> Result<f64, crate::error::ClosureFailure> {
     let a = s.liquid_fraction;
     let mut compliance = 0.0;
     if a > 0.0 {
-        compliance += a / fluid.bulk_modulus(Phase::Liquid, s.liquid_density, temperature);
+        compliance += a / fluid.bulk_modulus(Phase::Liquid, s.liquid_density, temperature)?;
     }
     if a < 1.0 {
-        compliance += (1.0 - a) / fluid.bulk_modulus(Phase::Gas, s.gas_density, temperature);
+        compliance += (1.0 - a) / fluid.bulk_modulus(Phase::Gas, s.gas_density, temperature)?;
     }
-    1.0 / (compliance * volume)
+    Ok(1.0 / (compliance * volume))
 }
 
 /// Closes every pore of `state` from its masses (no mass update).
