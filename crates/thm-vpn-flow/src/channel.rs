@@ -112,6 +112,40 @@ pub fn two_layer_flow(
     }
 }
 
+/// The layer flow rates per unit width and unit pressure gradient, `(Q_q/G, Q_p/G)`
+/// [m³/(Pa·s)], of a channel of aperture `h` holding a liquid layer `α_q h`: the same closed
+/// form as [`two_layer_flow`] without the shear stresses, with fast single-phase paths
+/// (`h³/(12 μ)` for the phase that fills the channel).
+#[inline]
+pub fn two_layer_conductances(
+    aperture: f64,
+    liquid_fraction: f64,
+    liquid_viscosity: f64,
+    gas_viscosity: f64,
+) -> (f64, f64) {
+    let h = aperture;
+    if h <= 0.0 {
+        return (0.0, 0.0);
+    }
+    let h3 = h * h * h / 12.0;
+    if liquid_fraction >= 1.0 {
+        return (h3 / liquid_viscosity, 0.0);
+    }
+    if liquid_fraction <= 0.0 {
+        return (0.0, h3 / gas_viscosity);
+    }
+    let (mq, mp) = (liquid_viscosity, gas_viscosity);
+    let (inv_mq, inv_mp) = (1.0 / mq, 1.0 / mp);
+    let a = liquid_fraction * h;
+    let b = h - a;
+    let coef_a = (a * a * mp * inv_mq + b * (2.0 * a + b)) / (2.0 * (a * mp + b * mq));
+    let coef_b = (mq * coef_a - h) * inv_mp;
+    (
+        a * a * (0.5 * coef_a - a * inv_mq / 6.0),
+        -b * b * (b * inv_mp / 6.0 + 0.5 * coef_b),
+    )
+}
+
 /// Total volumetric conductance per unit width `(Q_q + Q_p)/G` [m³/(Pa·s)] of a channel of
 /// aperture `h` holding a liquid layer `α_q h`. It decreases monotonically with `α_q` when
 /// `μ_q ≥ μ_p`, from `h³/(12 μ_p)` to `h³/(12 μ_q)`.
@@ -121,14 +155,9 @@ pub fn two_layer_conductance(
     liquid_viscosity: f64,
     gas_viscosity: f64,
 ) -> f64 {
-    let f = two_layer_flow(
-        aperture,
-        liquid_fraction,
-        1.0,
-        liquid_viscosity,
-        gas_viscosity,
-    );
-    f.liquid_flow_rate + f.gas_flow_rate
+    let (cq, cp) =
+        two_layer_conductances(aperture, liquid_fraction, liquid_viscosity, gas_viscosity);
+    cq + cp
 }
 
 #[cfg(test)]
@@ -234,6 +263,18 @@ mod tests {
     }
 
     #[test]
+    fn conductances_are_the_flow_rates_at_unit_gradient() {
+        for k in 0..=10 {
+            let alpha = k as f64 / 10.0;
+            let f = two_layer_flow(2e-6, alpha, 1.0, MU_WATER, MU_AIR);
+            let (cq, cp) = two_layer_conductances(2e-6, alpha, MU_WATER, MU_AIR);
+            let scale = poiseuille_flow_rate(2e-6, 1.0, MU_AIR);
+            assert!((cq - f.liquid_flow_rate).abs() <= 1e-14 * scale);
+            assert!((cp - f.gas_flow_rate).abs() <= 1e-14 * scale);
+        }
+    }
+
+    #[test]
     fn conductance_decreases_with_liquid_fraction() {
         let h = 2e-6;
         let mut last = f64::INFINITY;
@@ -243,6 +284,31 @@ mod tests {
             last = c;
         }
         assert!((last - h.powi(3) / (12.0 * MU_WATER)).abs() < 1e-12 * last);
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+        #[test]
+        fn walls_balance_the_pressure_drop_and_flow_lies_between_the_single_phase_limits(
+            h in 1e-7f64..1e-4,
+            alpha in 0.0f64..=1.0,
+            g in -1e9f64..1e9,
+            mq in 1e-5f64..1e-2,
+            ratio in 1.0f64..100.0,
+        ) {
+            let mp = mq / ratio;
+            let f = two_layer_flow(h, alpha, g, mq, mp);
+            let scale = (g * h).abs().max(f64::MIN_POSITIVE);
+            proptest::prop_assert!(
+                (f.liquid_wall_shear + f.gas_wall_shear - g * h).abs() <= 1e-11 * scale
+            );
+            let total = f.liquid_flow_rate + f.gas_flow_rate;
+            let (slow, fast) = (poiseuille_flow_rate(h, g, mq), poiseuille_flow_rate(h, g, mp));
+            let tol = 1e-12 * fast.abs();
+            proptest::prop_assert!(total.abs() >= slow.abs() - tol && total.abs() <= fast.abs() + tol);
+            // Each layer flows down the gradient.
+            proptest::prop_assert!(f.liquid_flow_rate * g >= 0.0 && f.gas_flow_rate * g >= 0.0);
+        }
     }
 
     #[test]

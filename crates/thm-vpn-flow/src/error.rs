@@ -36,6 +36,12 @@ pub enum ClosureFailure {
     /// The pore holds no mass of either phase: no pressure is defined.
     #[error("empty pore (no liquid and no gas): pressure undefined")]
     Empty,
+    /// A failure reported by the fluid model (e.g. an equation of state), in its own words.
+    #[error("fluid model: {message}")]
+    Model {
+        /// The model's message.
+        message: String,
+    },
     /// No state of the fluid model satisfies the closure (e.g. a pure liquid stretched to a
     /// pressure below the model's lower limit).
     #[error("no solution: {reason} (value {value:e})")]

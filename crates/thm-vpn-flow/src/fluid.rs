@@ -43,8 +43,14 @@ pub trait PoreFluid: Sync {
     -> Result<f64, ClosureFailure>;
 
     /// Isothermal bulk modulus `K = ρ ∂P/∂ρ` \[Pa\] of one phase at `density` and `temperature`
-    /// (used for the stable time step).
-    fn bulk_modulus(&self, phase: Phase, density: f64, temperature: f64) -> f64;
+    /// (used for the stable time step). Must be finite and positive on the phase's stable
+    /// branch; an error stops the step naming the pore.
+    fn bulk_modulus(
+        &self,
+        phase: Phase,
+        density: f64,
+        temperature: f64,
+    ) -> Result<f64, ClosureFailure>;
 }
 
 /// Parameters of [`LinearLiquidIdealGas`] (serde, validated by
@@ -90,6 +96,10 @@ pub struct LinearLiquidIdealGas {
     /// `ρ_q = a + b P`.
     a: f64,
     b: f64,
+    /// `1/b = K/ρ₀`.
+    inv_b: f64,
+    /// `R/w_p`.
+    r_over_w: f64,
 }
 
 impl LinearLiquidIdealGas {
@@ -138,7 +148,13 @@ impl LinearLiquidIdealGas {
         )?;
         let b = p.liquid_reference_density / p.liquid_bulk_modulus;
         let a = p.liquid_reference_density - b * p.liquid_reference_pressure;
-        Ok(Self { p, a, b })
+        Ok(Self {
+            p,
+            a,
+            b,
+            inv_b: p.liquid_bulk_modulus / p.liquid_reference_density,
+            r_over_w: p.gas_constant / p.gas_molar_mass,
+        })
     }
 
     /// The parameters.
@@ -151,7 +167,27 @@ impl LinearLiquidIdealGas {
     }
 
     fn gas_density_at(&self, pressure: f64, temperature: f64) -> f64 {
-        pressure * self.p.gas_molar_mass / (self.p.gas_constant * temperature)
+        pressure / (self.r_over_w * temperature)
+    }
+}
+
+/// The error for closure inputs outside their ranges (the first offending one).
+#[cold]
+fn invalid_input(liquid_mass: f64, gas_mass: f64, volume: f64, temperature: f64) -> ClosureFailure {
+    if !(liquid_mass.is_finite() && liquid_mass >= 0.0) {
+        ClosureFailure::NegativeMass {
+            phase: Phase::Liquid,
+            value: liquid_mass,
+        }
+    } else if !(gas_mass.is_finite() && gas_mass >= 0.0) {
+        ClosureFailure::NegativeMass {
+            phase: Phase::Gas,
+            value: gas_mass,
+        }
+    } else if !(volume.is_finite() && volume > 0.0) {
+        ClosureFailure::NonPositiveVolume { value: volume }
+    } else {
+        ClosureFailure::NonPositiveTemperature { value: temperature }
     }
 }
 
@@ -163,30 +199,21 @@ impl PoreFluid for LinearLiquidIdealGas {
         volume: f64,
         temperature: f64,
     ) -> Result<PoreState, ClosureFailure> {
-        if !(liquid_mass.is_finite() && liquid_mass >= 0.0) {
-            return Err(ClosureFailure::NegativeMass {
-                phase: Phase::Liquid,
-                value: liquid_mass,
-            });
-        }
-        if !(gas_mass.is_finite() && gas_mass >= 0.0) {
-            return Err(ClosureFailure::NegativeMass {
-                phase: Phase::Gas,
-                value: gas_mass,
-            });
-        }
-        if !(volume.is_finite() && volume > 0.0) {
-            return Err(ClosureFailure::NonPositiveVolume { value: volume });
-        }
-        if !(temperature.is_finite() && temperature > 0.0) {
-            return Err(ClosureFailure::NonPositiveTemperature { value: temperature });
+        let inputs_valid = (0.0..f64::INFINITY).contains(&liquid_mass)
+            && (0.0..f64::INFINITY).contains(&gas_mass)
+            && volume > 0.0
+            && volume < f64::INFINITY
+            && temperature > 0.0
+            && temperature < f64::INFINITY;
+        if !inputs_valid {
+            return Err(invalid_input(liquid_mass, gas_mass, volume, temperature));
         }
         if gas_mass == 0.0 {
             if liquid_mass == 0.0 {
                 return Err(ClosureFailure::Empty);
             }
             let rho = liquid_mass / volume;
-            let pressure = (rho - self.a) / self.b;
+            let pressure = (rho - self.a) * self.inv_b;
             if pressure <= 0.0 {
                 return Err(ClosureFailure::NoSolution {
                     reason: "pure liquid below zero pressure (pressure in Pa)",
@@ -200,7 +227,7 @@ impl PoreFluid for LinearLiquidIdealGas {
                 gas_density: self.gas_density_at(pressure, temperature),
             });
         }
-        let g = gas_mass * self.p.gas_constant * temperature / self.p.gas_molar_mass;
+        let g = gas_mass * self.r_over_w * temperature;
         if liquid_mass == 0.0 {
             let pressure = g / volume;
             return Ok(PoreState {
@@ -274,13 +301,18 @@ impl PoreFluid for LinearLiquidIdealGas {
         }
     }
 
-    fn bulk_modulus(&self, phase: Phase, density: f64, temperature: f64) -> f64 {
-        match phase {
+    fn bulk_modulus(
+        &self,
+        phase: Phase,
+        density: f64,
+        temperature: f64,
+    ) -> Result<f64, ClosureFailure> {
+        Ok(match phase {
             // K = ρ dP/dρ = ρ / b.
-            Phase::Liquid => density / self.b,
+            Phase::Liquid => density * self.inv_b,
             // P = ρ R T / w ⇒ K = P.
-            Phase::Gas => density * self.p.gas_constant * temperature / self.p.gas_molar_mass,
-        }
+            Phase::Gas => density * self.r_over_w * temperature,
+        })
     }
 }
 
@@ -310,6 +342,33 @@ mod tests {
             let pq = (s.liquid_density - m.a) / m.b;
             let pp = s.gas_density * 8314.4598 * t / 28.9647;
             assert!((pq - pp).abs() <= 1e-6 * p);
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(300))]
+        #[test]
+        fn closure_conserves_both_masses_for_any_pore(
+            liquid_mass in 0.0f64..2e-6,
+            gas_mass in 0.0f64..1e-7,
+            volume in 1e-10f64..1e-8,
+            temperature in 250.0f64..400.0,
+        ) {
+            let m = model();
+            match m.close(liquid_mass, gas_mass, volume, temperature) {
+                Ok(s) => {
+                    proptest::prop_assert!((0.0..=1.0).contains(&s.liquid_fraction));
+                    proptest::prop_assert!(s.pressure > 0.0);
+                    let mq = s.liquid_fraction * s.liquid_density * volume;
+                    let mp = (1.0 - s.liquid_fraction) * s.gas_density * volume;
+                    proptest::prop_assert!((mq - liquid_mass).abs() <= 1e-12 * liquid_mass.max(1e-30));
+                    proptest::prop_assert!((mp - gas_mass).abs() <= 1e-12 * gas_mass.max(1e-30));
+                }
+                // Only an empty pore or stretched pure liquid have no solution.
+                Err(ClosureFailure::Empty) => proptest::prop_assert!(liquid_mass == 0.0 && gas_mass == 0.0),
+                Err(ClosureFailure::NoSolution { .. }) => proptest::prop_assert!(gas_mass == 0.0),
+                Err(e) => proptest::prop_assert!(false, "{e}"),
+            }
         }
     }
 

@@ -88,7 +88,11 @@
 //! - [`Network`] — the minimal view the solver runs on (pores, channels with endpoints,
 //!   lengths and apertures, boundary links, fluid–solid wall faces), built from a
 //!   `thm_vpn_mesh::PoreMesh` with [`Network::from_mesh`] or by hand with [`Network::new`].
-//! - [`FlowState`] — struct-of-arrays per pore, owned by the caller (serde).
+//! - [`FlowState`] — struct-of-arrays per pore, owned by the caller (serde): the phase masses
+//!   (the conserved unknowns), volume and temperature, and their closure (fraction, pressure,
+//!   densities, pressure stiffness `K/V`), plus the cumulative boundary inflows. The stepper
+//!   keeps it closed; after changing masses or volumes outside it (a remap) call
+//!   [`FlowState::close`]. Per-cell inputs map to pores with [`Network::cells_to_pores`].
 //! - [`FlowStepper`] — scratch buffers only; `step(network, state, fluid, dv_dt, dt)` runs the
 //!   stages of [`stepper`]: channel fluxes → boundary fluxes → gather per pore (with the
 //!   sub-step limit) → mass/volume update and closure.

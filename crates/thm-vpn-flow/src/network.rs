@@ -437,6 +437,22 @@ impl Network {
             .collect()
     }
 
+    /// Picks the values of the fluid cells, in pore order, from a per-cell array (e.g. `dV/dt`
+    /// of every mesh cell from the solid motion, or cell temperatures from the heat solver).
+    pub fn cells_to_pores(&self, cell_values: &[f64], out: &mut [f64]) -> Result<(), FlowError> {
+        check_len("pore values", self.n_pores(), out.len())?;
+        for (o, &c) in out.iter_mut().zip(&self.pore_cell) {
+            *o = *cell_values
+                .get(c as usize)
+                .ok_or(FlowError::LengthMismatch {
+                    what: "cell values",
+                    expected: c as usize + 1,
+                    got: cell_values.len(),
+                })?;
+        }
+        Ok(())
+    }
+
     /// Number of pores.
     pub fn n_pores(&self) -> usize {
         self.parts.n_pores

@@ -31,6 +31,10 @@ pub struct FlowState {
     pub liquid_density: Vec<f64>,
     /// Gas density [kg/m³].
     pub gas_density: Vec<f64>,
+    /// Pressure stiffness `K/V` of each pore's mixture [Pa/m³] (`1/K = α_q/K_q + α_p/K_p`,
+    /// `K_k = ρ_k ∂P/∂ρ_k`): the pressure rise per unit volume of fluid added. Part of the
+    /// closure; sets the stable sub-step.
+    pub pressure_stiffness: Vec<f64>,
     /// Liquid mass that entered through each boundary group since the start \[kg\].
     pub boundary_liquid_inflow: Vec<f64>,
     /// Gas mass that entered through each boundary group since the start \[kg\].
@@ -84,6 +88,7 @@ impl FlowState {
             pressure: vec![0.0; n],
             liquid_density: vec![0.0; n],
             gas_density: vec![0.0; n],
+            pressure_stiffness: vec![0.0; n],
             boundary_liquid_inflow: vec![0.0; ng],
             boundary_gas_inflow: vec![0.0; ng],
         };

@@ -6,7 +6,7 @@
 //! 4. [`advance_and_close`]: `m += Δt Σ M_f` (A-Eqs. 24, 26), `V += dV/dt Δt` (A-Eq. 25),
 //!    then the closure (A-Eq. 29) for fraction, pressure and densities.
 
-use crate::channel::{poiseuille_flow_rate, two_layer_flow};
+use crate::channel::two_layer_conductances;
 use crate::error::{FlowError, Phase};
 use crate::fluid::PoreFluid;
 use crate::network::{BoundaryCondition, Network, SECOND_END};
@@ -130,9 +130,10 @@ pub fn channel_fluxes(
         });
 }
 
-/// Flux of one channel or link from its upwind state; `alpha_min` is the smaller liquid
-/// fraction of the two ends (the conductance is largest there, since `μ_q ≥ μ_p` is not
-/// assumed the bound takes the larger of the two end values).
+/// Flux of one channel or link from its upwind state (`alpha_up`, `rho_q`, `rho_p`).
+/// `alpha_other` is the liquid fraction of the other end: the conductance bound is the larger
+/// of the total conductances at the two ends' fractions, so it holds whichever way the flow
+/// turns during the sub-step (the conductance is monotone in `α_q`, `μ_q ≥ μ_p` not assumed).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn pipe_flux(
@@ -147,33 +148,14 @@ fn pipe_flux(
     mq: f64,
     mp: f64,
 ) -> ChannelFlux {
-    let (qq, qp) = if alpha_up >= 1.0 {
-        (poiseuille_flow_rate(h, g, mq), 0.0)
-    } else if alpha_up <= 0.0 {
-        (0.0, poiseuille_flow_rate(h, g, mp))
-    } else {
-        let f = two_layer_flow(h, alpha_up, g, mq, mp);
-        (f.liquid_flow_rate, f.gas_flow_rate)
-    };
-    let conductance_of = |alpha: f64| -> f64 {
-        if alpha >= 1.0 {
-            poiseuille_flow_rate(h, 1.0, mq)
-        } else if alpha <= 0.0 {
-            poiseuille_flow_rate(h, 1.0, mp)
-        } else {
-            let f = two_layer_flow(h, alpha, 1.0, mq, mp);
-            f.liquid_flow_rate + f.gas_flow_rate
-        }
-    };
-    let c_up = if g != 0.0 {
-        (qq + qp) / g
-    } else {
-        conductance_of(alpha_up)
-    };
+    let (cq, cp) = two_layer_conductances(h, alpha_up, mq, mp);
+    let (qq, qp) = (cq * g, cp * g);
+    let c_up = cq + cp;
     let c_other = if alpha_other == alpha_up {
         c_up
     } else {
-        conductance_of(alpha_other)
+        let (oq, op) = two_layer_conductances(h, alpha_other, mq, mp);
+        oq + op
     };
     ChannelFlux {
         liquid: rho_q * qq * w,
@@ -310,7 +292,6 @@ pub fn gather_pore_rates(
     config: &FlowConfig,
     channel: &[ChannelFlux],
     link: &[ChannelFlux],
-    stiffness: &[f64],
     out: &mut [PoreRate],
     substep: u32,
 ) -> Result<SubstepLimit, FlowError> {
@@ -322,8 +303,8 @@ pub fn gather_pore_rates(
         pore: usize::MAX,
         max_reynolds: 0.0,
     };
-    // The smaller limit (ties: the smaller pore index) and the larger Reynolds number:
-    // both order-independent, so the reduction is deterministic.
+    // Across chunks: the smaller limit (ties: the smaller pore index) and the larger Reynolds
+    // number, both order-independent, so the reduction is deterministic.
     let better = |a: SubstepLimit, b: SubstepLimit| {
         let max_reynolds = a.max_reynolds.max(b.max_reynolds);
         let mut m = if b.dt < a.dt || (b.dt == a.dt && b.pore < a.pore) {
@@ -333,12 +314,6 @@ pub fn gather_pore_rates(
         };
         m.max_reynolds = max_reynolds;
         m
-    };
-    let candidate = |dt: f64, limit: StepLimit, pore: usize| SubstepLimit {
-        dt,
-        limit,
-        pore,
-        max_reynolds: 0.0,
     };
     out.par_chunks_mut(CHUNK)
         .enumerate()
@@ -388,17 +363,29 @@ pub fn gather_pore_rates(
                         liquid: lq,
                         gas: lp,
                     };
-                    let a = stiffness[p] * cond;
-                    if a > 0.0 {
-                        best = better(best, candidate(s_stab / a, StepLimit::Stability, p));
+                    // Candidates in a fixed order; a strict `<` keeps the first (and, across
+                    // pores of the chunk, the smallest) index on ties.
+                    let a = state.pressure_stiffness[p] * cond;
+                    if a > 0.0 && s_stab / a < best.dt {
+                        best.dt = s_stab / a;
+                        best.limit = StepLimit::Stability;
+                        best.pore = p;
                     }
                     if lq < 0.0 {
                         let dt = s_pos * state.liquid_mass[p] / -lq;
-                        best = better(best, candidate(dt, StepLimit::LiquidPositivity, p));
+                        if dt < best.dt {
+                            best.dt = dt;
+                            best.limit = StepLimit::LiquidPositivity;
+                            best.pore = p;
+                        }
                     }
                     if lp < 0.0 {
                         let dt = s_pos * state.gas_mass[p] / -lp;
-                        best = better(best, candidate(dt, StepLimit::GasPositivity, p));
+                        if dt < best.dt {
+                            best.dt = dt;
+                            best.limit = StepLimit::GasPositivity;
+                            best.pore = p;
+                        }
                     }
                 }
                 Ok(best)
@@ -416,8 +403,8 @@ pub fn gather_pore_rates(
 }
 
 /// Stage 4: advances the phase masses and volumes of every pore by `dt` and closes them.
-/// `dv_dt` is `dV/dt` per pore [m³/s] (empty: rigid pores). Updates `stiffness` (`K/V` of
-/// each pore's mixture, `1/K = α_q/K_q + α_p/K_p`).
+/// `dv_dt` is `dV/dt` per pore [m³/s] (empty: rigid pores). Also updates the pressure
+/// stiffness `K/V` of each pore's mixture (`1/K = α_q/K_q + α_p/K_p`).
 #[allow(clippy::too_many_arguments)]
 pub fn advance_and_close(
     state: &mut FlowState,
@@ -425,7 +412,6 @@ pub fn advance_and_close(
     rates: &[PoreRate],
     dv_dt: &[f64],
     dt: f64,
-    stiffness: &mut [f64],
     substep: u32,
 ) -> Result<(), FlowError> {
     let step = state.step;
@@ -438,6 +424,7 @@ pub fn advance_and_close(
         pressure,
         liquid_density,
         gas_density,
+        pressure_stiffness,
         ..
     } = state;
     let result = (
@@ -448,7 +435,7 @@ pub fn advance_and_close(
         pressure.par_chunks_mut(CHUNK),
         liquid_density.par_chunks_mut(CHUNK),
         gas_density.par_chunks_mut(CHUNK),
-        stiffness.par_chunks_mut(CHUNK),
+        pressure_stiffness.par_chunks_mut(CHUNK),
     )
         .into_par_iter()
         .enumerate()
@@ -474,13 +461,16 @@ pub fn advance_and_close(
                     ));
                 }
                 let t = temperature[i];
-                match fluid.close(mq[k], mp[k], v[k], t) {
-                    Ok(s) => {
+                let closed = fluid
+                    .close(mq[k], mp[k], v[k], t)
+                    .and_then(|s| Ok((s, mixture_stiffness(fluid, &s, t, v[k])?)));
+                match closed {
+                    Ok((s, stiffness)) => {
                         a[k] = s.liquid_fraction;
                         p[k] = s.pressure;
                         rq[k] = s.liquid_density;
                         rp[k] = s.gas_density;
-                        st[k] = mixture_stiffness(fluid, &s, t, v[k]);
+                        st[k] = stiffness;
                     }
                     Err(cause) => {
                         return Some((
@@ -494,18 +484,27 @@ pub fn advance_and_close(
                         ));
                     }
                 }
-                if !p[k].is_finite() {
-                    return Some((
-                        i,
-                        FlowError::NonFinite {
-                            quantity: "pressure",
-                            place: "pore",
-                            index: i,
-                            value: p[k],
-                            step,
-                            substep,
-                        },
-                    ));
+                for (quantity, value, ok) in [
+                    ("pressure", p[k], p[k].is_finite()),
+                    (
+                        "pressure stiffness",
+                        st[k],
+                        st[k].is_finite() && st[k] > 0.0,
+                    ),
+                ] {
+                    if !ok {
+                        return Some((
+                            i,
+                            FlowError::NonFinite {
+                                quantity,
+                                place: "pore",
+                                index: i,
+                                value,
+                                step,
+                                substep,
+                            },
+                        ));
+                    }
                 }
             }
             None
@@ -517,21 +516,22 @@ pub fn advance_and_close(
     }
 }
 
+/// `K/V` of a pore's mixture, `1/K = α_q/K_q + α_p/K_p`.
 fn mixture_stiffness(
     fluid: &impl PoreFluid,
     s: &crate::fluid::PoreState,
     temperature: f64,
     volume: f64,
-) -> f64 {
+) -> Result<f64, crate::error::ClosureFailure> {
     let a = s.liquid_fraction;
     let mut compliance = 0.0;
     if a > 0.0 {
-        compliance += a / fluid.bulk_modulus(Phase::Liquid, s.liquid_density, temperature);
+        compliance += a / fluid.bulk_modulus(Phase::Liquid, s.liquid_density, temperature)?;
     }
     if a < 1.0 {
-        compliance += (1.0 - a) / fluid.bulk_modulus(Phase::Gas, s.gas_density, temperature);
+        compliance += (1.0 - a) / fluid.bulk_modulus(Phase::Gas, s.gas_density, temperature)?;
     }
-    1.0 / (compliance * volume)
+    Ok(1.0 / (compliance * volume))
 }
 
 /// Closes every pore of `state` from its masses (no mass update).
@@ -540,8 +540,7 @@ pub fn close_pores(
     fluid: &impl PoreFluid,
     substep: u32,
 ) -> Result<(), FlowError> {
-    let mut stiffness = vec![0.0; state.n_pores()];
-    advance_and_close(state, fluid, &[], &[], 0.0, &mut stiffness, substep)
+    advance_and_close(state, fluid, &[], &[], 0.0, substep)
 }
 
 /// The explicit stepper: scratch buffers only (the state is the caller's).
@@ -551,7 +550,6 @@ pub struct FlowStepper {
     channel: Vec<ChannelFlux>,
     link: Vec<ChannelFlux>,
     rates: Vec<PoreRate>,
-    stiffness: Vec<f64>,
     inflow: Vec<GroupInflow>,
 }
 
@@ -563,7 +561,6 @@ impl FlowStepper {
             channel: Vec::new(),
             link: Vec::new(),
             rates: Vec::new(),
-            stiffness: Vec::new(),
             inflow: Vec::new(),
         }
     }
@@ -586,17 +583,29 @@ impl FlowStepper {
     fn prepare(
         &mut self,
         network: &Network,
-        state: &mut FlowState,
+        state: &FlowState,
         fluid: &impl PoreFluid,
         dv_dt: &[f64],
     ) -> Result<(), FlowError> {
         let np = network.n_pores();
-        if state.n_pores() != np {
-            return Err(FlowError::LengthMismatch {
-                what: "state pores",
-                expected: np,
-                got: state.n_pores(),
-            });
+        for (what, len) in [
+            ("state volume", state.volume.len()),
+            ("state temperature", state.temperature.len()),
+            ("state liquid_mass", state.liquid_mass.len()),
+            ("state gas_mass", state.gas_mass.len()),
+            ("state liquid_fraction", state.liquid_fraction.len()),
+            ("state pressure", state.pressure.len()),
+            ("state liquid_density", state.liquid_density.len()),
+            ("state gas_density", state.gas_density.len()),
+            ("state pressure_stiffness", state.pressure_stiffness.len()),
+        ] {
+            if len != np {
+                return Err(FlowError::LengthMismatch {
+                    what,
+                    expected: np,
+                    got: len,
+                });
+            }
         }
         if !dv_dt.is_empty() && dv_dt.len() != np {
             return Err(FlowError::LengthMismatch {
@@ -617,32 +626,7 @@ impl FlowStepper {
             .resize(network.n_channels(), ChannelFlux::default());
         self.link.resize(network.n_links(), ChannelFlux::default());
         self.rates.resize(np, PoreRate::default());
-        self.stiffness.resize(np, 0.0);
         self.inflow = group_inflows(network, fluid, state.step)?;
-        // The mixture stiffness of every pore from its current closure (the state is kept
-        // closed by the stepper; a caller that changes masses or volumes outside it, e.g. by a
-        // remap, calls `FlowState::close` first).
-        let FlowState {
-            liquid_fraction,
-            liquid_density,
-            gas_density,
-            temperature,
-            volume,
-            ..
-        } = &*state;
-        self.stiffness
-            .par_iter_mut()
-            .with_min_len(CHUNK)
-            .enumerate()
-            .for_each(|(p, st)| {
-                let s = crate::fluid::PoreState {
-                    liquid_fraction: liquid_fraction[p],
-                    pressure: 0.0,
-                    liquid_density: liquid_density[p],
-                    gas_density: gas_density[p],
-                };
-                *st = mixture_stiffness(fluid, &s, temperature[p], volume[p]);
-            });
         Ok(())
     }
 
@@ -650,7 +634,7 @@ impl FlowStepper {
     pub fn stable_substep(
         &mut self,
         network: &Network,
-        state: &mut FlowState,
+        state: &FlowState,
         fluid: &impl PoreFluid,
     ) -> Result<SubstepLimit, FlowError> {
         self.prepare(network, state, fluid, &[])?;
@@ -662,7 +646,6 @@ impl FlowStepper {
             &self.config,
             &self.channel,
             &self.link,
-            &self.stiffness,
             &mut self.rates,
             0,
         )
@@ -671,6 +654,9 @@ impl FlowStepper {
     /// Advances `state` by the outer step `dt` \[s\], sub-cycling with the stable sub-step.
     /// `dv_dt` is `dV/dt` of every pore [m³/s] from the solid motion, constant over the outer
     /// step (empty: rigid pores).
+    ///
+    /// On error the state is left where the failure happened (possibly part-way through a
+    /// sub-step): restore it from a saved copy before retrying with a smaller step.
     pub fn step(
         &mut self,
         network: &Network,
@@ -707,7 +693,6 @@ impl FlowStepper {
                 &self.config,
                 &self.channel,
                 &self.link,
-                &self.stiffness,
                 &mut self.rates,
                 substep,
             )?;
@@ -738,15 +723,7 @@ impl FlowStepper {
                 state.boundary_liquid_inflow[g] += h * report.boundary_liquid_rate[g];
                 state.boundary_gas_inflow[g] += h * report.boundary_gas_rate[g];
             }
-            advance_and_close(
-                state,
-                fluid,
-                &self.rates,
-                dv_dt,
-                h,
-                &mut self.stiffness,
-                substep,
-            )?;
+            advance_and_close(state, fluid, &self.rates, dv_dt, h, substep)?;
             report.substeps += 1;
             report.smallest_substep = report.smallest_substep.min(h);
             remaining = if h >= remaining { 0.0 } else { remaining - h };

@@ -454,14 +454,14 @@ fn darcy_permeability() -> Result<CaseOutput, CaseError> {
     let (kappa_fit, imbalance_fit, max_re_fit) =
         transient_permeability(&mesh_fit, &net_fit, &fluid, kappa_paper)?;
     out.rows.push(Row::relative(
-        format!("kappa(gamma = {gamma_fit:.5}) vs the paper's kappa"),
+        format!("kappa(gamma = {gamma_fit:.4e}) vs the paper's kappa"),
         "m^2",
         kappa_fit,
         kappa_paper,
         1e-3,
     ));
     out.rows.push(Row::at_most(
-        format!("|m_bottom + m_top| / m_bottom at steady state (gamma = {gamma_fit:.5})"),
+        format!("|m_bottom + m_top| / m_bottom at steady state (gamma = {gamma_fit:.4e})"),
         "",
         imbalance_fit,
         1e-6,
@@ -475,7 +475,7 @@ fn darcy_permeability() -> Result<CaseOutput, CaseError> {
     );
     out.notes.push(format!(
         "kappa(gamma = 0.0115) = {kappa:.4e} m^2 on this mesh; gamma giving kappa = 2.47e-16 \
-         m^2: {gamma_fit:.5}; max channel Reynolds number {max_re:.3e} (gamma = 0.0115), \
+         m^2: {gamma_fit:.4e}; max channel Reynolds number {max_re:.3e} (gamma = 0.0115), \
          {max_re_fit:.3e} (fitted gamma)"
     ));
     out.notes.push(format!(
