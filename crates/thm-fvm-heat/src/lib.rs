@@ -5,6 +5,7 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 mod error;
+mod implicit;
 pub mod params;
 pub mod properties;
 pub mod spheres;
