@@ -30,13 +30,13 @@ const MIN_PAR_LEN: usize = 256;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StepperParams {
-    /// Time step Δt [s] (see [`critical_time_step`]).
+    /// Time step Δt \[s\] (see [`critical_time_step`]).
     pub time_step: f64,
     /// Cundall's non-viscous damping `α_d` ∈ [0, 1) (A-Eq. 7; Krzaczek et al. use 0.08).
     pub damping: f64,
-    /// Gravitational acceleration [m/s²].
+    /// Gravitational acceleration \[m/s²\].
     pub gravity: [f64; 3],
-    /// Verlet skin [m]: pairs closer than `R_a + R_b + skin` are listed; the list is rebuilt
+    /// Verlet skin \[m\]: pairs closer than `R_a + R_b + skin` are listed; the list is rebuilt
     /// when a particle or wall moved (or a radius grew) by more than half of it.
     pub verlet_skin: f64,
 }
@@ -119,7 +119,7 @@ impl<L: ContactLaw> Stepper<L> {
         &self.config
     }
 
-    /// Replaces the time step (e.g. after radii changed) [s].
+    /// Replaces the time step (e.g. after radii changed) \[s\].
     pub fn set_time_step(&mut self, dt: f64) -> Result<(), DemError> {
         self.config.params.time_step = check_positive("time_step", dt)?;
         Ok(())
@@ -612,7 +612,7 @@ fn build_csr(
     }
 }
 
-/// Critical time step estimate [s]: for every free particle `√(m / Σ(K_n + K_s))` over its
+/// Critical time step estimate \[s\]: for every free particle `√(m / Σ(K_n + K_s))` over its
 /// contacts carrying force (or bonded) and `√(I / Σ K_s R²)`, minimised. For a linear
 /// system this is `√2` below the leapfrog stability limit `2/ω_max` (Gershgorin bound on
 /// `ω_max² ≤ 2 Σk/m`). Particles with no contact are given two contacts with a twin.

@@ -150,15 +150,15 @@ fn run_bond_threshold() -> Result<CaseOutput, CaseError> {
 pub struct TensionTest {
     /// Packing seed.
     pub seed: u64,
-    /// Speed of each plate [m/s] (A-Sect. 3.1: 1 mm/s, opposite directions).
+    /// Speed of each plate \[m/s\] (A-Sect. 3.1: 1 mm/s, opposite directions).
     pub plate_speed: f64,
-    /// Out-of-plane thickness that turns the plate force into a stress [m]. The paper converts
+    /// Out-of-plane thickness that turns the plate force into a stress \[m\]. The paper converts
     /// between 2D stresses and sphere forces with the largest sphere diameter (A-Sect. 2.2).
     pub thickness: f64,
     /// Particles whose surface lies within this distance of the bar's end are gripped by the
-    /// plate [m].
+    /// plate \[m\].
     pub grip_depth: f64,
-    /// Surfaces closer than this are bonded [m].
+    /// Surfaces closer than this are bonded \[m\].
     pub bond_gap: f64,
 }
 
@@ -177,15 +177,15 @@ impl Default for TensionTest {
 /// What the tension test measured.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TensionResult {
-    /// Strain (plate separation over the initial length) at each sample [-].
+    /// Strain (plate separation over the initial length) at each sample \[-\].
     pub strain: Vec<f64>,
-    /// Tensile stress (mean of the two plate forces over width × thickness) [Pa].
+    /// Tensile stress (mean of the two plate forces over width × thickness) \[Pa\].
     pub stress: Vec<f64>,
-    /// Peak stress [Pa].
+    /// Peak stress \[Pa\].
     pub strength: f64,
-    /// Strain at the peak [-].
+    /// Strain at the peak \[-\].
     pub strain_at_peak: f64,
-    /// Secant-fit Young's modulus between 10 % and 50 % of the peak on the rising branch [Pa].
+    /// Secant-fit Young's modulus between 10 % and 50 % of the peak on the rising branch \[Pa\].
     pub young_modulus: f64,
     /// Bonds broken when the stress has fallen below 5 % of the peak.
     pub broken_bonds: usize,
@@ -197,9 +197,9 @@ pub struct TensionResult {
     pub coordination_at_failure: f64,
     /// Number of particles.
     pub particle_count: usize,
-    /// Largest tensile contact force before the peak [N].
+    /// Largest tensile contact force before the peak \[N\].
     pub max_tensile_contact_force: f64,
-    /// Mean tensile contact force at the peak [N].
+    /// Mean tensile contact force at the peak \[N\].
     pub mean_tensile_contact_force: f64,
 }
 

@@ -2,7 +2,10 @@
 
 #[test]
 fn quick_verification_cases_pass() {
-    for case in thm_dem::verification::cases().into_iter().filter(|c| c.quick) {
+    for case in thm_dem::verification::cases()
+        .into_iter()
+        .filter(|c| c.quick)
+    {
         let out = (case.run)().unwrap();
         assert!(out.passed(), "{}: {:?}", case.name, out.rows);
     }
