@@ -519,6 +519,12 @@ impl<L: ContactLaw> Stepper<L> {
     }
 }
 
+fn reserve_to<T>(v: &mut Vec<T>, capacity: usize) {
+    if v.capacity() < capacity {
+        v.reserve(capacity - v.len());
+    }
+}
+
 /// Cundall's non-viscous damping per component (A-Eq. 7, as YADE's `NewtonIntegrator`):
 /// `F_k ← F_k (1 − α_d sgn(F_k v_k))` with `v_k` the mid-step velocity estimate
 /// `v_k^{n−½} + ½ Δt F_k/m`: a force that accelerates is reduced, one that decelerates is
