@@ -6,11 +6,12 @@
 #
 #   benchmarks/peers/liggghts/run.sh [STEPS=2000] [ROUNDS=3]
 set -euo pipefail
+SUDO=$([ "$(id -u)" = 0 ] || echo sudo)
 STEPS=${1:-2000}; ROUNDS=${2:-3}; DT=2e-6
 here=$(cd "$(dirname "$0")" && pwd); root=$(cd "$here/../../.." && pwd)
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 
-command -v liggghts >/dev/null || { sudo apt-get update && sudo apt-get install -y liggghts openmpi-bin; }
+command -v liggghts >/dev/null || { $SUDO apt-get update && $SUDO apt-get install -y liggghts openmpi-bin; }
 (cd "$root" && cargo build --release -p thm-benchmarks --bin dem_peer)
 peer="$root/target/release/dem_peer"
 

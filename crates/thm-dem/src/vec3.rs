@@ -178,7 +178,10 @@ pub fn rotate_about(v: Vec3, axis: Vec3, angle: f64) -> Vec3 {
     // (truncation below 1e-17 relative) replaces the costlier sin_cos.
     let a2 = angle * angle;
     let (s, c) = if angle.abs() < 1e-3 {
-        (angle * (1.0 - a2 / 6.0 * (1.0 - a2 / 20.0)), 1.0 - a2 / 2.0 * (1.0 - a2 / 12.0))
+        (
+            angle * (1.0 - a2 / 6.0 * (1.0 - a2 / 20.0)),
+            1.0 - a2 / 2.0 * (1.0 - a2 / 12.0),
+        )
     } else {
         angle.sin_cos()
     };
