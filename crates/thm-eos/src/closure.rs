@@ -12,20 +12,20 @@ pub struct ClosureState {
     /// Gas volume fraction `1 − α`, computed directly where it is the smaller one (so a trace
     /// of gas keeps its own relative precision): `(gas_fraction) · gas_density · V = m_gas`.
     pub gas_fraction: f64,
-    /// The common pressure of both phases [Pa].
+    /// The common pressure of both phases (Pa).
     pub pressure: f64,
-    /// Liquid density [kg/m³]: `m_liquid / (α V)`; with no liquid (α = 0), the liquid's
+    /// Liquid density (kg/m³): `m_liquid / (α V)`; with no liquid (α = 0), the liquid's
     /// density at the pore pressure (0 when that pressure is not positive).
     pub liquid_density: f64,
-    /// Gas density [kg/m³]: `m_gas / ((1 − α) V)`; with no gas (α = 1), the gas's density at
+    /// Gas density (kg/m³): `m_gas / ((1 − α) V)`; with no gas (α = 1), the gas's density at
     /// the pore pressure (0 when that pressure is not positive).
     pub gas_density: f64,
 }
 
 /// Phase fractions and pressure of a pore from its phase masses, volume and temperature.
 pub trait PoreClosure {
-    /// Closes a pore of volume `pore_volume` [m³] at `temperature` [K] holding `liquid_mass`
-    /// and `gas_mass` [kg].
+    /// Closes a pore of volume `pore_volume` (m³) at `temperature` (K) holding `liquid_mass`
+    /// and `gas_mass` (kg).
     fn close(
         &self,
         temperature: f64,
@@ -64,7 +64,7 @@ pub struct TwoPhaseClosure<L, G> {
 /// bracket 64 times in this budget, more than enough to reach round-off on [0, 1]).
 const MAX_ITERATIONS: usize = 200;
 
-/// Pressure at which the first guess of the liquid density is taken [Pa].
+/// Pressure at which the first guess of the liquid density is taken (Pa).
 const GUESS_PRESSURE: f64 = 1.0e5;
 
 fn check_nonnegative(
