@@ -131,7 +131,10 @@ enum Trial {
         p_liquid: f64,
         p_gas: f64,
     },
-    /// A phase is past its spinodal (`∂P/∂ρ ≤ 0`) or on its other branch: α is too large.
+    /// The liquid is at or above its co-volume density: α is too small.
+    LiquidTooDense,
+    /// A phase is past its spinodal (`∂P/∂ρ ≤ 0`) or on its other branch, or the gas is at its
+    /// co-volume: α is too large.
     Unstable,
 }
 
@@ -152,8 +155,16 @@ impl<L: EquationOfState, G: EquationOfState> TwoPhaseClosure<L, G> {
     ) -> Result<Trial, EosError> {
         let rho_l = c_l / alpha;
         let rho_g = c_g / gas_fraction;
-        let (p_l, dpl) = self.liquid.pressure_and_dp_drho(t, rho_l)?;
-        let (p_g, dpg) = self.gas.pressure_and_dp_drho(t, rho_g)?;
+        // A trial rounded onto a co-volume (only possible within an ulp of a bracket end, where
+        // that phase's pressure is unbounded) says which side of the root it is on.
+        let (p_l, dpl) = match self.liquid.pressure_and_dp_drho(t, rho_l) {
+            Err(EosError::BelowCovolume { .. }) => return Ok(Trial::LiquidTooDense),
+            other => other?,
+        };
+        let (p_g, dpg) = match self.gas.pressure_and_dp_drho(t, rho_g) {
+            Err(EosError::BelowCovolume { .. }) => return Ok(Trial::Unstable),
+            other => other?,
+        };
         let stable = dpl > 0.0
             && dpg > 0.0
             && self.liquid.on_branch(t, rho_l, Branch::Liquid)?
@@ -303,6 +314,13 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
                     }
                     0.5 * (lo + hi)
                 }
+                Trial::LiquidTooDense => {
+                    match unknown {
+                        Unknown::Liquid => lo = x,
+                        Unknown::Gas => hi = x,
+                    }
+                    0.5 * (lo + hi)
+                }
                 Trial::Stable {
                     f,
                     df,
@@ -367,7 +385,7 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
         let converged_to_root = seen_liquid_below_gas || {
             match self.trial(t, c_l, c_g, alpha, gamma)? {
                 Trial::Stable { f, df, .. } => (f / df).abs() <= 8.0 * f64::EPSILON * x,
-                Trial::Unstable => false,
+                Trial::Unstable | Trial::LiquidTooDense => false,
             }
         };
         if !converged_to_root {
