@@ -43,7 +43,8 @@ pub trait PoreClosure {
 /// volume fraction of the phase that takes less room (α, or 1 − α for a nearly full liquid
 /// pore), so that it converges to its own round-off: α to ~1e-16, a trace gas fraction to its
 /// relative round-off. The first guess is the liquid's volume at 0.1 MPa; a typical closure
-/// takes 3–6 iterations. On the admissible interval (both molar volumes above the co-volume, both phases
+/// takes 1 to 15 iterations (the most when the liquid at 0.1 MPa would not fit in the pore, as
+/// in a nearly full pore at tens of MPa). On the admissible interval (both molar volumes above the co-volume, both phases
 /// on their mechanically stable branches, `∂P/∂ρ > 0`) the pressure difference decreases
 /// strictly with α, so the root there is unique. The liquid must be on its dense branch and the
 /// gas on its dilute one ([`EquationOfState::on_branch`]): where the liquid's cubic also has a
