@@ -159,7 +159,7 @@ fn closure_tends_to_single_phase_limits() {
     let water = PengRobinson::water(Model::PrCorrected);
     let m_l = v * water.density(t, 1e6, Branch::Liquid).unwrap();
     let only = pore.close(t, v, m_l, 0.0).unwrap();
-    // A trace of gas (1e-25 kg in a 1 nm³... 1e-9 m³ pore): its fraction is far below the
+    // A trace of gas (1e-25 kg in a 1e-9 m³ pore): its fraction is far below the
     // resolution of α near 1 but is resolved on its own, and its mass is conserved.
     let m_g = 1e-25;
     let nearly = pore.close(t, v, m_l, m_g).unwrap();
