@@ -42,9 +42,9 @@ pub trait PoreClosure {
 /// changes sign (a step that would leave it is replaced by bisection). The unknown is the
 /// volume fraction of the phase that takes less room (α, or 1 − α for a nearly full liquid
 /// pore), so that it converges to its own round-off: α to ~1e-16, a trace gas fraction to its
-/// relative round-off. The first guess is the liquid's volume at 0.1 MPa; a typical closure
-/// takes 1 to 15 iterations (the most when the liquid at 0.1 MPa would not fit in the pore, as
-/// in a nearly full pore at tens of MPa). On the admissible interval (both molar volumes above the co-volume, both phases
+/// relative round-off. The first guess is the liquid's volume at 0.1 MPa (at 70 MPa where that
+/// would not fit in the pore); the closures seen take 1 to 10 iterations, the most near the
+/// critical point. On the admissible interval (both molar volumes above the co-volume, both phases
 /// on their mechanically stable branches, `∂P/∂ρ > 0`) the pressure difference decreases
 /// strictly with α, so the root there is unique. The liquid must be on its dense branch and the
 /// gas on its dilute one ([`EquationOfState::on_branch`]): where the liquid's cubic also has a
@@ -67,6 +67,9 @@ const MAX_ITERATIONS: usize = 200;
 
 /// Pressure at which the first guess of the liquid density is taken (Pa).
 const GUESS_PRESSURE: f64 = 1.0e5;
+
+/// Pressure of the second guess, where the liquid at [`GUESS_PRESSURE`] would not fit (Pa).
+const HIGH_GUESS_PRESSURE: f64 = 7.0e7;
 
 fn check_nonnegative(
     quantity: &'static str,
@@ -284,10 +287,19 @@ impl<L: EquationOfState, G: EquationOfState> TwoPhaseClosure<L, G> {
                 "the phases do not fit in the pore even at their co-volumes",
             ));
         }
-        let alpha_guess = match self.liquid.density(t, GUESS_PRESSURE, Branch::Liquid) {
-            Ok(rho) if self.liquid.on_branch(t, rho, Branch::Liquid)? => c_l / rho,
-            _ => f64::NAN,
+        let liquid_fraction_at = |p: f64| -> Result<f64, EosError> {
+            Ok(match self.liquid.density(t, p, Branch::Liquid) {
+                Ok(rho) if self.liquid.on_branch(t, rho, Branch::Liquid)? => c_l / rho,
+                _ => f64::NAN,
+            })
         };
+        let mut alpha_guess = liquid_fraction_at(GUESS_PRESSURE)?;
+        if alpha_guess >= 1.0 - gamma_min {
+            // The liquid at 0.1 MPa does not fit: the pore is at high pressure. Start from the
+            // liquid at the top of the validated range instead (it fits if any state does
+            // below that pressure).
+            alpha_guess = liquid_fraction_at(HIGH_GUESS_PRESSURE)?;
+        }
         let (unknown, lo, hi, guess) = if alpha_guess > 0.5 {
             (Unknown::Gas, gamma_min, 1.0 - alpha_min, 1.0 - alpha_guess)
         } else {
