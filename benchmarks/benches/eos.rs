@@ -52,6 +52,21 @@ fn eos(c: &mut Criterion) {
             )
         })
     });
+    // The slowest start seen: a nearly full pore (99 % water) at 70 MPa and 278.15 K, where the
+    // liquid at 0.1 MPa would not fit and the search starts by bisection.
+    let (t3, p3) = (278.15, 7.0e7);
+    let m_l3 = 0.99 * v * water.density(t3, p3, Branch::Liquid).unwrap_or(0.0);
+    let m_g3 = 0.01 * v * air.density(t3, p3, Branch::Gas).unwrap_or(0.0);
+    c.bench_function("eos/closure/water_air_99_1_70MPa", |b| {
+        b.iter(|| {
+            pore.close(
+                black_box(t3),
+                black_box(v),
+                black_box(m_l3),
+                black_box(m_g3),
+            )
+        })
+    });
 }
 
 criterion_group!(benches, eos);

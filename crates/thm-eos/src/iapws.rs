@@ -12,14 +12,14 @@
 use crate::peng_robinson::{check_density, check_pressure, check_temperature};
 use crate::{Branch, EosError, EquationOfState};
 
-/// Molar mass of water used by IAPWS [kg/kmol].
+/// Molar mass of water used by IAPWS (kg/kmol).
 const WATER_MOLAR_MASS: f64 = 18.015268;
-/// Lowest and highest temperature accepted [K] (IF97 regions 1 and 2 below the region-3 boundary).
+/// Lowest and highest temperature accepted (K) (IF97 regions 1 and 2 below the region-3 boundary).
 const T_MIN: f64 = 273.15;
 const T_MAX: f64 = 623.15;
-/// Highest pressure of IF97 [Pa].
+/// Highest pressure of IF97 (Pa).
 const P_MAX: f64 = 100.0e6;
-/// Highest liquid density accepted [kg/m³] (the compressed liquid at 100 MPa and 273.15 K is
+/// Highest liquid density accepted (kg/m³) (the compressed liquid at 100 MPa and 273.15 K is
 /// about 1050 kg/m³).
 const RHO_MAX: f64 = 1.0 / 0.00095;
 const RANGE: &str = "273.15 K <= T <= 623.15 K, 0 < P <= 100 MPa";
@@ -64,7 +64,7 @@ fn valid(
 }
 
 impl Iapws97Water {
-    /// Pressure [Pa] at (T, ρ): IF97's (T, v) backward evaluation.
+    /// Pressure (Pa) at (T, ρ): IF97's (T, v) backward evaluation.
     fn pressure_checked(&self, temperature: f64, density: f64) -> Result<(f64, f64), EosError> {
         let t = check_range(temperature)?;
         let rho = check_density(density)?;

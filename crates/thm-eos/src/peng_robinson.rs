@@ -3,7 +3,7 @@
 use crate::{Branch, EosError, EquationOfState};
 use serde::{Deserialize, Serialize};
 
-/// Universal gas constant of paper A, Table 1 [J/(kmol·K)].
+/// Universal gas constant of paper A, Table 1 (J/(kmol·K)).
 pub const GAS_CONSTANT: f64 = 8314.4598;
 
 /// Coefficient of the critical attraction, A-Eq. 20.
@@ -11,7 +11,7 @@ const OMEGA_A: f64 = 0.457247;
 /// Coefficient of the co-volume, A-Eq. 21.
 const OMEGA_B: f64 = 0.07780;
 
-/// The Péneloux volume shift of liquid water, A-Eq. 23 and Sect. 2.2.2 [m³/kmol].
+/// The Péneloux volume shift of liquid water, A-Eq. 23 and Sect. 2.2.2 (m³/kmol).
 pub const WATER_VOLUME_SHIFT: f64 = -0.0034;
 
 /// `x_m = V/b` at which `L(x) = (x² + 2x − 1)² / ((x + 1)(x − 1)²)` is smallest.
@@ -32,18 +32,18 @@ pub(crate) const CRITICAL_THETA: f64 = 11.754_719_897_208_806;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FluidParameters {
-    /// Critical temperature `T_c` [K].
+    /// Critical temperature `T_c` (K).
     pub critical_temperature: f64,
-    /// Critical pressure `P_c` [Pa].
+    /// Critical pressure `P_c` (Pa).
     pub critical_pressure: f64,
-    /// Acentric factor `ω` [-].
+    /// Acentric factor `ω` (-).
     pub acentric_factor: f64,
-    /// Molar mass `w` [kg/kmol].
+    /// Molar mass `w` (kg/kmol).
     pub molar_mass: f64,
     /// The c1, c2, c3 of the alpha extension β(T), A-Eq. 22 (zeros give the original equation).
     #[serde(default)]
     pub alpha_extension: [f64; 3],
-    /// Péneloux volume shift `s` [m³/kmol], A-Eq. 23: `V_corr = V + s` (negative for water).
+    /// Péneloux volume shift `s` (m³/kmol), A-Eq. 23: `V_corr = V + s` (negative for water).
     #[serde(default)]
     pub volume_shift: f64,
 }
@@ -92,18 +92,18 @@ impl FluidParameters {
 
 /// A validated Peng–Robinson fluid: constants of A-Eqs. 18, 20, 21 precomputed.
 ///
-/// Densities are mass densities [kg/m³]; the cubic works in the equation's own molar volume
-/// `V` [m³/kmol], related to the (corrected) density by A-Eq. 28: `V = w/ρ − s`.
+/// Densities are mass densities (kg/m³); the cubic works in the equation's own molar volume
+/// `V` (m³/kmol), related to the (corrected) density by A-Eq. 28: `V = w/ρ − s`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PengRobinson {
     params: FluidParameters,
-    /// a_c, A-Eq. 20 [Pa·(m³/kmol)²].
+    /// a_c, A-Eq. 20 (Pa·(m³/kmol)²).
     critical_attraction: f64,
-    /// b, A-Eq. 21 [m³/kmol].
+    /// b, A-Eq. 21 (m³/kmol).
     covolume: f64,
-    /// n, A-Eq. 18 [-].
+    /// n, A-Eq. 18 (-).
     kappa: f64,
-    /// 1/T_c [1/K].
+    /// 1/T_c (1/K).
     inv_critical_temperature: f64,
 }
 
@@ -125,7 +125,7 @@ fn parameter(
     }
 }
 
-/// Checks a temperature [K]: finite and positive.
+/// Checks a temperature (K): finite and positive.
 #[inline]
 pub(crate) fn check_temperature(temperature: f64) -> Result<f64, EosError> {
     if temperature.is_finite() && temperature > 0.0 {
@@ -139,7 +139,7 @@ pub(crate) fn check_temperature(temperature: f64) -> Result<f64, EosError> {
     }
 }
 
-/// Checks a density [kg/m³]: finite and positive.
+/// Checks a density (kg/m³): finite and positive.
 #[inline]
 pub(crate) fn check_density(density: f64) -> Result<f64, EosError> {
     if density.is_finite() && density > 0.0 {
@@ -153,7 +153,7 @@ pub(crate) fn check_density(density: f64) -> Result<f64, EosError> {
     }
 }
 
-/// Checks a pressure [Pa]: finite and positive.
+/// Checks a pressure (Pa): finite and positive.
 #[inline]
 pub(crate) fn check_pressure(pressure: f64) -> Result<f64, EosError> {
     if pressure.is_finite() && pressure > 0.0 {
@@ -235,17 +235,17 @@ impl PengRobinson {
         &self.params
     }
 
-    /// Co-volume `b`, A-Eq. 21 [m³/kmol].
+    /// Co-volume `b`, A-Eq. 21 (m³/kmol).
     pub fn covolume(&self) -> f64 {
         self.covolume
     }
 
-    /// Molar mass `w` [kg/kmol].
+    /// Molar mass `w` (kg/kmol).
     pub fn molar_mass(&self) -> f64 {
         self.params.molar_mass
     }
 
-    /// Volume shift `s` [m³/kmol].
+    /// Volume shift `s` (m³/kmol).
     pub fn volume_shift(&self) -> f64 {
         self.params.volume_shift
     }
@@ -272,7 +272,7 @@ impl PengRobinson {
         (a, da_du * du_dt)
     }
 
-    /// Attraction `a(T)` alone [Pa·(m³/kmol)²].
+    /// Attraction `a(T)` alone (Pa·(m³/kmol)²).
     #[inline]
     pub fn attraction(&self, temperature: f64) -> f64 {
         let sqrt_tr = (temperature * self.inv_critical_temperature).sqrt();
@@ -304,7 +304,7 @@ impl PengRobinson {
         self.params.molar_mass / (self.covolume + self.params.volume_shift)
     }
 
-    /// Pressure from A-Eq. 16 at molar volume `V > b` (not checked) [Pa].
+    /// Pressure from A-Eq. 16 at molar volume `V > b` (not checked) (Pa).
     #[inline]
     pub fn pressure_at_molar_volume(&self, temperature: f64, molar_volume: f64) -> f64 {
         let b = self.covolume;
@@ -333,7 +333,7 @@ impl PengRobinson {
         (p, dp_dv)
     }
 
-    /// The sum of the magnitudes of the two terms of A-Eq. 16 at this state [Pa]: the scale of
+    /// The sum of the magnitudes of the two terms of A-Eq. 16 at this state (Pa): the scale of
     /// the round-off in a computed pressure (the terms cancel in a dense liquid).
     pub fn pressure_term_scale(&self, temperature: f64, density: f64) -> Result<f64, EosError> {
         let v = self.molar_volume(density)?;

@@ -13,7 +13,7 @@ use crate::{
 use thm_verify::{Case, CaseError, CaseOutput, Plot, Row, Series, SeriesRole};
 
 /// Liquid water density at 0.1 MPa from IAPWS-95 (Wagner & Pruß 2002, J. Phys. Chem. Ref. Data
-/// 31, 387–535), rounded to 0.01 kg/m³: (T [K], ρ [kg/m³]). A unit test checks every entry
+/// 31, 387–535), rounded to 0.01 kg/m³: (T (K), ρ (kg/m³)). A unit test checks every entry
 /// against IAPWS-IF97 (seuif97), which agrees with IAPWS-95 to better than 0.005 % here.
 pub const IAPWS95_WATER_DENSITY_0_1_MPA: [(f64, f64); 12] = [
     (278.15, 999.97),
@@ -74,7 +74,7 @@ fn err(e: impl std::fmt::Display) -> CaseError {
     CaseError::from_display(e)
 }
 
-/// `∂P/∂V` [Pa·kmol/m³] at molar volume `v` of an uncorrected fluid, from the analytic ∂P/∂ρ.
+/// `∂P/∂V` (Pa·kmol/m³) at molar volume `v` of an uncorrected fluid, from the analytic ∂P/∂ρ.
 fn dp_dv(eos: &PengRobinson, t: f64, v: f64) -> Result<f64, CaseError> {
     let w = eos.molar_mass();
     let rho = w / v;

@@ -159,7 +159,7 @@ fn closure_tends_to_single_phase_limits() {
     let water = PengRobinson::water(Model::PrCorrected);
     let m_l = v * water.density(t, 1e6, Branch::Liquid).unwrap();
     let only = pore.close(t, v, m_l, 0.0).unwrap();
-    // A trace of gas (1e-25 kg in a 1 nm³... 1e-9 m³ pore): its fraction is far below the
+    // A trace of gas (1e-25 kg in a 1e-9 m³ pore): its fraction is far below the
     // resolution of α near 1 but is resolved on its own, and its mass is conserved.
     let m_g = 1e-25;
     let nearly = pore.close(t, v, m_l, m_g).unwrap();
@@ -204,4 +204,37 @@ fn iapws97_water_behind_the_trait() {
         s.liquid_fraction
     );
     assert!((s.pressure / p - 1.0).abs() < 1e-6, "{}", s.pressure);
+}
+
+/// Fluid parameters read from a file: validated once, unknown keys refused, and a round trip
+/// through TOML gives the same fluid.
+#[test]
+fn fluid_parameters_from_toml() {
+    use thm_eos::FluidParameters;
+    let text = r#"
+        critical_temperature = 647.096
+        critical_pressure = 22.064e6
+        acentric_factor = 0.344
+        molar_mass = 18.01528
+        volume_shift = -0.0034
+    "#;
+    let params: FluidParameters = toml::from_str(text).unwrap();
+    assert_eq!(params, thm_eos::FluidParameters::water(Model::PrCorrected));
+    let again: FluidParameters = toml::from_str(&toml::to_string(&params).unwrap()).unwrap();
+    assert_eq!(again, params);
+    assert_eq!(
+        PengRobinson::new(params).unwrap(),
+        PengRobinson::water(Model::PrCorrected)
+    );
+    let typo = text.replace("acentric_factor", "acentric");
+    assert!(toml::from_str::<FluidParameters>(&typo).is_err());
+    let negative = text.replace("647.096", "-647.096");
+    let params: FluidParameters = toml::from_str(&negative).unwrap();
+    assert!(matches!(
+        PengRobinson::new(params),
+        Err(EosError::InvalidParameter {
+            parameter: "critical_temperature",
+            ..
+        })
+    ));
 }

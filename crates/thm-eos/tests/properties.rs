@@ -104,7 +104,7 @@ proptest! {
     #[test]
     fn closure_conserves_masses_and_equalises_pressures(
         corrected in any::<bool>(),
-        t in 278.0f64..620.0,
+        t in 278.0f64..700.0,
         log_p in 4.0f64..(7e7f64).log10(),
         alpha in 0.001f64..0.999,
         log_v in -15.0f64..-3.0,
