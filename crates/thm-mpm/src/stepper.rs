@@ -119,6 +119,8 @@ pub struct Mpm {
     temperature_rate: Vec<f64>,
     wall_reactions: Vec<[f64; 2]>,
     empty_node_mass: f64,
+    /// Step counter of the state this stepper advanced last (`None` before the first step).
+    last_step: Option<u64>,
 }
 
 /// Smallest limits of B-Eqs. 30–31 over the points, with the points that set them.
@@ -173,6 +175,7 @@ impl Mpm {
             temperature_rate: Vec::new(),
             wall_reactions: vec![[0.0; 2]; config.params.walls.len()],
             empty_node_mass: 0.0,
+            last_step: None,
             config,
         }
     }
@@ -287,7 +290,10 @@ impl Mpm {
         Ok(())
     }
 
-    /// One explicit step of length `dt` (s).
+    /// One explicit step of length `dt` (s). The state is fully validated
+    /// ([`Mpm::validate_state`]) on the first step of this stepper and whenever its step
+    /// counter is not the one this stepper produced last (a restored or foreign state); a
+    /// caller that edits points between consecutive steps should call `validate_state` itself.
     pub fn step<M: Constitutive>(
         &mut self,
         state: &mut MpmState<M::PointState>,
@@ -300,9 +306,11 @@ impl Mpm {
                 points: state.points.len(),
             });
         }
-        if state.step == 0 {
+        if self.last_step != Some(state.step) {
             self.validate_state(state)?;
         }
+        // Cleared until the step succeeds: a failed step forces validation next time.
+        self.last_step = None;
         self.check_time_step(state, material, dt)?;
         self.reset_grid();
         self.particle_to_grid(&state.points, state.step)?;
@@ -311,6 +319,7 @@ impl Mpm {
         self.constitutive_update(state, material, dt)?;
         state.time += dt;
         state.step += 1;
+        self.last_step = Some(state.step);
         Ok(())
     }
 
