@@ -80,7 +80,8 @@ pub struct NodeSums {
     pub capacity: f64,
     /// `Σ m_p c_p φ_Ip T_p` (J).
     pub heat_content: f64,
-    /// `f_ext + f_int` (N), B-Eq. 18.
+    /// `f_int` plus the surface-layer tractions (N), B-Eq. 18; the body force `M_I b` is
+    /// added in the grid update.
     pub force: [f64; 2],
     /// `Q_ext + Q_int` (W), B-Eq. 17.
     pub heat_load: f64,
@@ -397,7 +398,6 @@ impl Mpm {
         let params = &self.config.params;
         let grid = &self.config.grid;
         let row_len = grid.nodes()[0];
-        let gravity = params.gravity;
         let loads = &params.surface_loads;
         let stencils = &self.stencils;
         self.empty_node_mass =
@@ -416,7 +416,8 @@ impl Mpm {
                 let mc = m * points.specific_heat[p];
                 let mct = mc * points.temperature[p];
                 let vol = points.volume[p];
-                let mut f = [m * gravity[0], m * gravity[1]];
+                // Gravity enters in `grid_update` as M_I b (= Σ_p φ_Ip m_p b, B-Eq. 18).
+                let mut f = [0.0; 2];
                 let mut q = vol * points.heat_source[p];
                 for load in loads {
                     if load.contains(points.position[p]) {
@@ -426,19 +427,24 @@ impl Mpm {
                         q += s * load.inward_heat_flux;
                     }
                 }
+                let loaded = f[0] != 0.0 || f[1] != 0.0 || q != 0.0;
                 for b in 0..3 {
                     let row = (st.y.base + b - row0) * row_len + st.x.base;
+                    let wy = st.y.w[b];
                     for a in 0..3 {
-                        let w = st.weight(a, b);
+                        let w = st.x.w[a] * wy;
                         let n = &mut nodes[row + a];
-                        n.mass += w * m;
-                        n.momentum[0] += w * m * v[0];
-                        n.momentum[1] += w * m * v[1];
+                        let wm = w * m;
+                        n.mass += wm;
+                        n.momentum[0] += wm * v[0];
+                        n.momentum[1] += wm * v[1];
                         n.capacity += w * mc;
                         n.heat_content += w * mct;
-                        n.force[0] += w * f[0];
-                        n.force[1] += w * f[1];
-                        n.heat_load += w * q;
+                        if loaded {
+                            n.force[0] += w * f[0];
+                            n.force[1] += w * f[1];
+                            n.heat_load += w * q;
+                        }
                     }
                 }
             },
@@ -527,6 +533,7 @@ impl Mpm {
         let gf = &mut self.grid_fields;
         let mask = &self.config.velocity_mask;
         let fixed = &self.config.fixed_temperature;
+        let gravity = self.config.params.gravity;
         let inv_dt = 1.0 / dt;
         gf.velocity_old
             .par_iter_mut()
@@ -546,8 +553,8 @@ impl Mpm {
                     let inv_m = 1.0 / s.mass;
                     let mut v0 = [s.momentum[0] * inv_m, s.momentum[1] * inv_m];
                     let mut v1 = [
-                        v0[0] + s.force[0] * inv_m * dt,
-                        v0[1] + s.force[1] * inv_m * dt,
+                        v0[0] + (s.force[0] * inv_m + gravity[0]) * dt,
+                        v0[1] + (s.force[1] * inv_m + gravity[1]) * dt,
                     ];
                     if mk & 1 != 0 {
                         v0[0] = 0.0;
