@@ -91,11 +91,77 @@ fn run<M: Constitutive>(name: &str, material: &M, side: usize, threads: usize, s
     });
 }
 
+/// CPU seconds per stage over `steps` steps (1 thread), to see where the time goes.
+fn stages<M: Constitutive>(material: &M, side: usize, steps: usize) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool");
+    pool.install(|| {
+        let (mut mpm, mut st) = column(side, material);
+        let dt = 1e-4;
+        let mut t = [0.0f64; 5];
+        for _ in 0..steps {
+            let c0 = cpu_seconds();
+            mpm.check_time_step(&st, material, dt).expect("dt");
+            let c1 = cpu_seconds();
+            mpm.reset_grid();
+            mpm.particle_to_grid(&st.points, st.step).expect("p2g");
+            let c2 = cpu_seconds();
+            mpm.grid_update(dt, st.time, st.step).expect("grid");
+            let c3 = cpu_seconds();
+            mpm.grid_to_particle(&mut st.points, dt, st.step)
+                .expect("g2p");
+            let c4 = cpu_seconds();
+            mpm.constitutive_update(&mut st, material, dt)
+                .expect("material");
+            let c5 = cpu_seconds();
+            st.time += dt;
+            st.step += 1;
+            for (k, (a, b)) in [(c0, c1), (c1, c2), (c2, c3), (c3, c4), (c4, c5)]
+                .iter()
+                .enumerate()
+            {
+                t[k] += b - a;
+            }
+        }
+        let total: f64 = t.iter().sum();
+        let names = [
+            "check_time_step",
+            "reset+P2G",
+            "grid_update",
+            "G2P",
+            "constitutive",
+        ];
+        for (n, v) in names.iter().zip(t) {
+            println!(
+                "{n:16} {:5.1} %  ({:.1} ns/pt-step)",
+                100.0 * v / total,
+                1e9 * v / (steps * st.points.len()) as f64
+            );
+        }
+    });
+}
+
 fn main() {
     let steps: usize = std::env::args()
         .nth(1)
         .and_then(|s| s.parse().ok())
         .unwrap_or(200);
+    if std::env::args().any(|a| a == "--stages") {
+        let dp = DruckerPrager::new(&DruckerPragerParameters {
+            youngs_modulus: 1e6,
+            poisson_ratio: 0.3,
+            friction_angle_deg: 30.0,
+            dilatancy_angle_deg: 0.0,
+            cohesion: 0.0,
+            thermal_expansion: 0.0,
+            conductivity: [1.0, 1.0, 0.0],
+        })
+        .expect("valid");
+        stages(&dp, 158, steps);
+        return;
+    }
     let dp = DruckerPrager::new(&DruckerPragerParameters {
         youngs_modulus: 1e6,
         poisson_ratio: 0.3,

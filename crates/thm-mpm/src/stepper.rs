@@ -80,7 +80,8 @@ pub struct NodeSums {
     pub capacity: f64,
     /// `Σ m_p c_p φ_Ip T_p` (J).
     pub heat_content: f64,
-    /// `f_ext + f_int` (N), B-Eq. 18.
+    /// `f_int` plus the surface-layer tractions (N), B-Eq. 18; the body force `M_I b` is
+    /// added in the grid update.
     pub force: [f64; 2],
     /// `Q_ext + Q_int` (W), B-Eq. 17.
     pub heat_load: f64,
@@ -119,6 +120,8 @@ pub struct Mpm {
     temperature_rate: Vec<f64>,
     wall_reactions: Vec<[f64; 2]>,
     empty_node_mass: f64,
+    /// Step counter of the state this stepper advanced last (`None` before the first step).
+    last_step: Option<u64>,
 }
 
 /// Smallest limits of B-Eqs. 30–31 over the points, with the points that set them.
@@ -173,6 +176,7 @@ impl Mpm {
             temperature_rate: Vec::new(),
             wall_reactions: vec![[0.0; 2]; config.params.walls.len()],
             empty_node_mass: 0.0,
+            last_step: None,
             config,
         }
     }
@@ -287,7 +291,10 @@ impl Mpm {
         Ok(())
     }
 
-    /// One explicit step of length `dt` (s).
+    /// One explicit step of length `dt` (s). The state is fully validated
+    /// ([`Mpm::validate_state`]) on the first step of this stepper and whenever its step
+    /// counter is not the one this stepper produced last (a restored or foreign state); a
+    /// caller that edits points between consecutive steps should call `validate_state` itself.
     pub fn step<M: Constitutive>(
         &mut self,
         state: &mut MpmState<M::PointState>,
@@ -300,9 +307,11 @@ impl Mpm {
                 points: state.points.len(),
             });
         }
-        if state.step == 0 {
+        if self.last_step != Some(state.step) {
             self.validate_state(state)?;
         }
+        // Cleared until the step succeeds: a failed step forces validation next time.
+        self.last_step = None;
         self.check_time_step(state, material, dt)?;
         self.reset_grid();
         self.particle_to_grid(&state.points, state.step)?;
@@ -311,6 +320,7 @@ impl Mpm {
         self.constitutive_update(state, material, dt)?;
         state.time += dt;
         state.step += 1;
+        self.last_step = Some(state.step);
         Ok(())
     }
 
@@ -388,7 +398,6 @@ impl Mpm {
         let params = &self.config.params;
         let grid = &self.config.grid;
         let row_len = grid.nodes()[0];
-        let gravity = params.gravity;
         let loads = &params.surface_loads;
         let stencils = &self.stencils;
         self.empty_node_mass =
@@ -407,7 +416,8 @@ impl Mpm {
                 let mc = m * points.specific_heat[p];
                 let mct = mc * points.temperature[p];
                 let vol = points.volume[p];
-                let mut f = [m * gravity[0], m * gravity[1]];
+                // Gravity enters in `grid_update` as M_I b (= Σ_p φ_Ip m_p b, B-Eq. 18).
+                let mut f = [0.0; 2];
                 let mut q = vol * points.heat_source[p];
                 for load in loads {
                     if load.contains(points.position[p]) {
@@ -417,19 +427,24 @@ impl Mpm {
                         q += s * load.inward_heat_flux;
                     }
                 }
+                let loaded = f[0] != 0.0 || f[1] != 0.0 || q != 0.0;
                 for b in 0..3 {
                     let row = (st.y.base + b - row0) * row_len + st.x.base;
+                    let wy = st.y.w[b];
                     for a in 0..3 {
-                        let w = st.weight(a, b);
+                        let w = st.x.w[a] * wy;
                         let n = &mut nodes[row + a];
-                        n.mass += w * m;
-                        n.momentum[0] += w * m * v[0];
-                        n.momentum[1] += w * m * v[1];
+                        let wm = w * m;
+                        n.mass += wm;
+                        n.momentum[0] += wm * v[0];
+                        n.momentum[1] += wm * v[1];
                         n.capacity += w * mc;
                         n.heat_content += w * mct;
-                        n.force[0] += w * f[0];
-                        n.force[1] += w * f[1];
-                        n.heat_load += w * q;
+                        if loaded {
+                            n.force[0] += w * f[0];
+                            n.force[1] += w * f[1];
+                            n.heat_load += w * q;
+                        }
                     }
                 }
             },
@@ -518,6 +533,7 @@ impl Mpm {
         let gf = &mut self.grid_fields;
         let mask = &self.config.velocity_mask;
         let fixed = &self.config.fixed_temperature;
+        let gravity = self.config.params.gravity;
         let inv_dt = 1.0 / dt;
         gf.velocity_old
             .par_iter_mut()
@@ -537,8 +553,8 @@ impl Mpm {
                     let inv_m = 1.0 / s.mass;
                     let mut v0 = [s.momentum[0] * inv_m, s.momentum[1] * inv_m];
                     let mut v1 = [
-                        v0[0] + s.force[0] * inv_m * dt,
-                        v0[1] + s.force[1] * inv_m * dt,
+                        v0[0] + (s.force[0] * inv_m + gravity[0]) * dt,
+                        v0[1] + (s.force[1] * inv_m + gravity[1]) * dt,
                     ];
                     if mk & 1 != 0 {
                         v0[0] = 0.0;
