@@ -27,17 +27,29 @@
 //! `respond(velocity_gradient, temperature, dt, substeps) → (stress, heat source, conductivity
 //! tensor)` per RVE, with state kept per RVE, and a batch that steps many RVEs in parallel with
 //! results identical for 1 and 2 threads. `thm-coupling` adapts it to `thm-mpm`'s constitutive
-//! trait. The implementation arrives with the crate's full version; this crate holds no
-//! physics yet.
+//! trait.
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
-pub mod verification {
-    //! Verification cases of this crate, collected by `cargo xtask verify`.
-    use thm_verify::Case;
+pub mod batch;
+pub mod cell;
+pub mod error;
+pub mod mat2;
+pub mod measure;
+pub mod neighbour;
+pub mod packing;
+pub mod params;
+pub mod state;
+pub mod stepper;
+pub mod verification;
 
-    /// All verification cases of `thm-rve`.
-    pub fn cases() -> Vec<Case> {
-        Vec::new()
-    }
-}
+pub use batch::RveBatch;
+pub use cell::{CellStrain, PeriodicCell};
+pub use error::RveError;
+pub use mat2::Mat2;
+pub use packing::{
+    ConsolidationParams, ConsolidationReport, PackingParams, consolidate, random_packing,
+};
+pub use params::{RveConfig, RveParams};
+pub use state::{PeriodicContacts, RveState};
+pub use stepper::{RveLoad, RveResponse, RveStepper};
