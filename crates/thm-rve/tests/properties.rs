@@ -1,6 +1,8 @@
 //! Invariants the crate promises: frame indifference of the stress invariants, periodicity,
 //! a symmetric positive definite conductivity, thread-count independence and save/restore.
 
+#![allow(clippy::needless_range_loop)] // tensor indices read as in B-Eq. 58
+
 use proptest::prelude::*;
 use std::sync::OnceLock;
 use thm_rve::verification::consolidated_packing;
