@@ -34,11 +34,11 @@ pub enum BreakMode {
 /// The history a contact carries from step to step.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct ContactHistory {
-    /// Shear force on particle B [N], in the tangent plane of `normal`.
+    /// Shear force on particle B \[N\], in the tangent plane of `normal`.
     pub shear_force: Vec3,
     /// Contact normal (A → B) at the previous step; zero for a contact not yet evaluated.
     pub normal: Vec3,
-    /// Penetration at which the normal force is zero [m]: the creation penetration of a
+    /// Penetration at which the normal force is zero \[m\]: the creation penetration of a
     /// bond (stress-free at its creation distance; negative across a gap), 0 for a contact
     /// that was never bonded.
     pub reference_penetration: f64,
@@ -70,17 +70,17 @@ impl ContactHistory {
 pub struct ContactKinematics {
     /// Unit normal from A to B.
     pub normal: Vec3,
-    /// Geometric penetration `R_A + R_B − |x_B − x_A|` [m] (negative across a gap).
+    /// Geometric penetration `R_A + R_B − |x_B − x_A|` \[m\] (negative across a gap).
     pub penetration: f64,
     /// Tangential relative displacement of B with respect to A at the contact point over the
-    /// step [m] (`Δ X_s` of A-Eq. 2, `δu^t` of B-Eq. 35b).
+    /// step \[m\] (`Δ X_s` of A-Eq. 2, `δu^t` of B-Eq. 35b).
     pub shear_increment: Vec3,
-    /// Rotation of the contact frame about the normal over the step [rad]:
+    /// Rotation of the contact frame about the normal over the step \[rad\]:
     /// `½ (ω_A + ω_B)·n Δt`.
     pub twist_angle: f64,
-    /// Lever arm from the centre of A to the contact point [m].
+    /// Lever arm from the centre of A to the contact point \[m\].
     pub lever_a: Vec3,
-    /// Lever arm from the centre of B to the contact point [m].
+    /// Lever arm from the centre of B to the contact point \[m\].
     pub lever_b: Vec3,
 }
 
@@ -157,49 +157,49 @@ impl ContactKinematics {
 /// What a law needs to know about the two particles.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PairInput {
-    /// Radius of A [m].
+    /// Radius of A \[m\].
     pub radius_a: f64,
-    /// Radius of B [m] (for a wall: the particle's own radius, as YADE does).
+    /// Radius of B \[m\] (for a wall: the particle's own radius, as YADE does).
     pub radius_b: f64,
-    /// Contact temperature [K]: the mean of the two particle temperatures.
+    /// Contact temperature \[K\]: the mean of the two particle temperatures.
     pub temperature: f64,
 }
 
 /// Stiffnesses and strengths of one contact (YADE's "interaction physics").
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactProperties {
-    /// Normal stiffness `K_n` [N/m].
+    /// Normal stiffness `K_n` \[N/m\].
     pub normal_stiffness: f64,
-    /// Shear stiffness `K_s` [N/m].
+    /// Shear stiffness `K_s` \[N/m\].
     pub shear_stiffness: f64,
-    /// Friction coefficient `tan μ_c` (A) or `μ` (B) [-].
+    /// Friction coefficient `tan μ_c` (A) or `μ` (B) \[-\].
     pub friction_coefficient: f64,
-    /// Tensile strength of an intact bond [N] (`T·R²`, `β_b k_n R`).
+    /// Tensile strength of an intact bond \[N\] (`T·R²`, `β_b k_n R`).
     pub bond_tensile_strength: f64,
-    /// Shear strength of an intact bond at zero normal force [N] (`C·R²`, `μ_b F_nb`).
+    /// Shear strength of an intact bond at zero normal force \[N\] (`C·R²`, `μ_b F_nb`).
     pub bond_shear_strength: f64,
     /// Whether friction `F_n tan μ` adds to the bond's shear strength (A-Eq. 4: yes; B-Eq. 39:
     /// no).
     pub friction_adds_to_bond_shear: bool,
-    /// Area that turns the normal force into the contact normal stress [m²].
+    /// Area that turns the normal force into the contact normal stress \[m²\].
     pub stress_area: f64,
 }
 
 /// The result of one contact update.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct ContactResponse {
-    /// Total force on B [N] (A receives its negative).
+    /// Total force on B \[N\] (A receives its negative).
     pub force_on_b: Vec3,
-    /// Torque on A about its centre [N m].
+    /// Torque on A about its centre \[N m\].
     pub torque_on_a: Vec3,
-    /// Torque on B about its centre [N m].
+    /// Torque on B about its centre \[N m\].
     pub torque_on_b: Vec3,
-    /// Normal force [N], compression positive, tension negative (intact bonds only).
+    /// Normal force \[N\], compression positive, tension negative (intact bonds only).
     pub normal_force: f64,
-    /// Contact normal stress [Pa], compression positive (`F_n / R²`, the same `R` as the bond
+    /// Contact normal stress \[Pa\], compression positive (`F_n / R²`, the same `R` as the bond
     /// strength, so that an intact bond of A-Eq. 6 breaks at `σ_n = −T`).
     pub normal_stress: f64,
-    /// Energy dissipated by frictional sliding during the step [J] (B-Eq. 32).
+    /// Energy dissipated by frictional sliding during the step \[J\] (B-Eq. 32).
     pub friction_work: f64,
     /// Set in the step in which the bond broke.
     pub broke: Option<BreakMode>,
@@ -348,15 +348,15 @@ impl BondRadius {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CohesiveFrictionalParams {
-    /// Contact modulus `E_c` [Pa].
+    /// Contact modulus `E_c` \[Pa\].
     pub contact_modulus: f64,
-    /// Contact Poisson ratio `ν_c` [-]: `K_s = ν_c K_n` (A-Eq. 3).
+    /// Contact Poisson ratio `ν_c` \[-\]: `K_s = ν_c K_n` (A-Eq. 3).
     pub contact_poisson_ratio: f64,
-    /// Cohesive contact stress `C` [Pa].
+    /// Cohesive contact stress `C` \[Pa\].
     pub cohesion: f64,
-    /// Tensile normal contact stress `T` [Pa].
+    /// Tensile normal contact stress `T` \[Pa\].
     pub tensile_strength: f64,
-    /// Inter-particle friction angle `μ_c` [°].
+    /// Inter-particle friction angle `μ_c` \[°\].
     pub friction_angle_deg: f64,
     /// Which radius enters `T·R²` and `C·R²`.
     #[serde(default)]
@@ -447,13 +447,13 @@ impl ContactLaw for CohesiveFrictional {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ThermalBondParams {
-    /// `β_a` [-]: the breakage strength coefficient at the reference temperature.
+    /// `β_a` \[-\]: the breakage strength coefficient at the reference temperature.
     pub strength_coefficient: f64,
-    /// `T_s` [K]: temperature rise above `reference_temperature` at which the bond vanishes.
+    /// `T_s` \[K\]: temperature rise above `reference_temperature` at which the bond vanishes.
     pub threshold_temperature_rise: f64,
-    /// Temperature at which `T = 0` in B-Eq. 40 [K].
+    /// Temperature at which `T = 0` in B-Eq. 40 \[K\].
     pub reference_temperature: f64,
-    /// `μ_b` [-]: shear strength over normal strength (B-Eq. 39).
+    /// `μ_b` \[-\]: shear strength over normal strength (B-Eq. 39).
     pub shear_ratio: f64,
 }
 
@@ -476,11 +476,11 @@ impl ThermalBondParams {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LinearSpringParams {
-    /// `k_n` [N/m].
+    /// `k_n` \[N/m\].
     pub normal_stiffness: f64,
-    /// `k_t` [N/m].
+    /// `k_t` \[N/m\].
     pub tangential_stiffness: f64,
-    /// `μ` [-].
+    /// `μ` \[-\].
     pub friction_coefficient: f64,
     /// Bond parameters; `None` for a cohesionless material.
     #[serde(default)]

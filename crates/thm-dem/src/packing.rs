@@ -29,17 +29,17 @@ use std::fmt::Write as _;
 pub struct PackingParams {
     /// Spheres in a plane (one layer), disks, or spheres in 3D.
     pub kinematics: Kinematics,
-    /// Lower corner of the box [m] (`z` ignored for planar kinematics).
+    /// Lower corner of the box \[m\] (`z` ignored for planar kinematics).
     pub box_min: [f64; 3],
-    /// Upper corner of the box [m].
+    /// Upper corner of the box \[m\].
     pub box_max: [f64; 3],
-    /// Smallest diameter [m].
+    /// Smallest diameter \[m\].
     pub diameter_min: f64,
-    /// Largest diameter [m].
+    /// Largest diameter \[m\].
     pub diameter_max: f64,
     /// Target porosity `1 − Σ A_i / A` (planar) or `1 − Σ V_i / V` (3D).
     pub porosity: f64,
-    /// Surfaces closer than this get a bond [m].
+    /// Surfaces closer than this get a bond \[m\].
     pub bond_gap: f64,
     /// Seed of the ChaCha8 generator.
     pub seed: u64,
@@ -105,9 +105,9 @@ impl PackingParams {
 pub struct Packing {
     /// Kinematics it was made for.
     pub kinematics: Kinematics,
-    /// Centres [m].
+    /// Centres \[m\].
     pub centres: Vec<Vec3>,
-    /// Radii [m].
+    /// Radii \[m\].
     pub radii: Vec<f64>,
     /// Bonded pairs `(a, b)`, `a < b`, sorted.
     pub bonds: Vec<(usize, usize)>,
@@ -127,7 +127,7 @@ pub struct PackingReport {
 }
 
 impl Packing {
-    /// The particle state (uniform density [kg/m³] and temperature [K]) with the bonds
+    /// The particle state (uniform density \[kg/m³\] and temperature \[K\]) with the bonds
     /// installed stress-free at their current distance.
     pub fn to_state(&self, density: f64, temperature: f64) -> Result<DemState, DemError> {
         let particles = ParticleState::new(
@@ -288,7 +288,7 @@ fn solid_measure(kin: Kinematics, r: f64) -> f64 {
     }
 }
 
-/// Generates a random packing (see the module docs); `density` [kg/m³] sets the masses of
+/// Generates a random packing (see the module docs); `density` \[kg/m³\] sets the masses of
 /// the compaction run only.
 pub fn random_packing(
     params: &PackingParams,
@@ -429,7 +429,7 @@ pub fn random_packing(
 }
 
 /// A bonded packing for benchmarks: a jittered square (planar) or cubic (3D) lattice of
-/// spacing `spacing` [m], radii uniform in `[0.5, 0.56]·spacing` (so neighbours overlap
+/// spacing `spacing` \[m\], radii uniform in `[0.5, 0.56]·spacing` (so neighbours overlap
 /// slightly), `nx × ny × nz` particles (`nz` ignored in planar kinematics), bonds at all pairs
 /// closer than `0.05·spacing`. Seeded.
 pub fn lattice_packing(

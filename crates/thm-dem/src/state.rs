@@ -14,7 +14,7 @@ pub enum Kinematics {
     /// Spheres with centres held in `z = 0`: no `z` motion, no rotation about `x` or `y`
     /// (the single-layer specimens of Krzaczek et al.).
     SpheresInPlane,
-    /// Disks in the `xy` plane (2D, per unit thickness): mass `ρπR²` [kg/m], inertia `mR²/2`
+    /// Disks in the `xy` plane (2D, per unit thickness): mass `ρπR²` \[kg/m\], inertia `mR²/2`
     /// (the RVEs of Zhao et al.).
     Disks,
 }
@@ -26,7 +26,7 @@ impl Kinematics {
         !matches!(self, Self::Spheres3d)
     }
 
-    /// Mass of a particle of density `rho` [kg/m³] and radius `r` [m]: kg (spheres) or kg/m
+    /// Mass of a particle of density `rho` \[kg/m³\] and radius `r` \[m\]: kg (spheres) or kg/m
     /// (disks).
     #[inline]
     pub fn mass(self, rho: f64, r: f64) -> f64 {
@@ -52,37 +52,37 @@ impl Kinematics {
 pub struct ParticleState {
     /// Kinematics of all particles.
     pub kinematics: Kinematics,
-    /// Centres [m].
+    /// Centres \[m\].
     pub position: Vec<Vec3>,
-    /// Velocities [m/s].
+    /// Velocities \[m/s\].
     pub velocity: Vec<Vec3>,
-    /// Angular velocities [rad/s].
+    /// Angular velocities \[rad/s\].
     pub angular_velocity: Vec<Vec3>,
-    /// Current radii [m].
+    /// Current radii \[m\].
     pub radius: Vec<f64>,
-    /// Radii at the reference temperature (B-Eq. 37) [m].
+    /// Radii at the reference temperature (B-Eq. 37) \[m\].
     pub reference_radius: Vec<f64>,
-    /// Masses [kg] (disks: kg/m).
+    /// Masses \[kg\] (disks: kg/m).
     pub mass: Vec<f64>,
-    /// Moments of inertia [kg m²] (disks: kg m).
+    /// Moments of inertia \[kg m²\] (disks: kg m).
     pub inertia: Vec<f64>,
     /// Fixed particles ignore forces and move with their current (prescribed) velocity.
     pub fixed: Vec<bool>,
-    /// External forces (fluid pressure and shear) [N], held until the caller changes them.
+    /// External forces (fluid pressure and shear) \[N\], held until the caller changes them.
     pub external_force: Vec<Vec3>,
-    /// External torques [N m].
+    /// External torques \[N m\].
     pub external_torque: Vec<Vec3>,
-    /// Temperatures [K] (contact temperature of the thermal bond; radius updates).
+    /// Temperatures \[K\] (contact temperature of the thermal bond; radius updates).
     pub temperature: Vec<f64>,
-    /// Resultant force of the last step before damping [N] (contacts + external + gravity).
+    /// Resultant force of the last step before damping \[N\] (contacts + external + gravity).
     pub force: Vec<Vec3>,
-    /// Resultant torque of the last step before damping [N m].
+    /// Resultant torque of the last step before damping \[N m\].
     pub torque: Vec<Vec3>,
 }
 
 impl ParticleState {
-    /// Particles at rest from centres and radii, of uniform density [kg/m³] and temperature
-    /// [K]. Plane kinematics put the centres into `z = 0`.
+    /// Particles at rest from centres and radii, of uniform density \[kg/m³\] and temperature
+    /// \[K\]. Plane kinematics put the centres into `z = 0`.
     pub fn new(
         kinematics: Kinematics,
         density: f64,
@@ -222,7 +222,7 @@ impl ParticleState {
         Ok(())
     }
 
-    /// Total linear momentum [kg m/s] (free and fixed particles).
+    /// Total linear momentum \[kg m/s\] (free and fixed particles).
     pub fn momentum(&self) -> Vec3 {
         self.mass
             .iter()
@@ -230,7 +230,7 @@ impl ParticleState {
             .fold(Vec3::ZERO, |acc, (&m, &v)| acc + v * m)
     }
 
-    /// Total kinetic energy, translational and rotational [J].
+    /// Total kinetic energy, translational and rotational \[J\].
     pub fn kinetic_energy(&self) -> f64 {
         let mut e = 0.0;
         for i in 0..self.len() {
@@ -240,7 +240,7 @@ impl ParticleState {
         e
     }
 
-    /// Sum of the last step's resultant forces on the given particles [N] (e.g. the grips of
+    /// Sum of the last step's resultant forces on the given particles \[N\] (e.g. the grips of
     /// a specimen: the force a plate exerts through them is its negative).
     pub fn resultant_force(&self, particles: &[usize]) -> Vec3 {
         particles
@@ -379,7 +379,7 @@ impl ContactList {
             .count()
     }
 
-    /// Friction work of the last step summed over contacts, in contact order [J].
+    /// Friction work of the last step summed over contacts, in contact order \[J\].
     pub fn friction_work(&self) -> f64 {
         self.response.iter().map(|r| r.friction_work).sum()
     }
@@ -400,13 +400,13 @@ impl ContactList {
 /// A rigid plane wall (or plate) moving at a prescribed velocity.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Wall {
-    /// A point of the plane [m].
+    /// A point of the plane \[m\].
     pub point: Vec3,
     /// Unit normal pointing into the domain.
     pub normal: Vec3,
-    /// Prescribed velocity [m/s].
+    /// Prescribed velocity \[m/s\].
     pub velocity: Vec3,
-    /// Force the particles exerted on the wall in the last step [N].
+    /// Force the particles exerted on the wall in the last step \[N\].
     pub force: Vec3,
 }
 
@@ -457,7 +457,7 @@ pub struct DemState {
     pub wall_contacts: ContactList,
     /// Steps done.
     pub step: u64,
-    /// Simulated time [s].
+    /// Simulated time \[s\].
     pub time: f64,
     /// Broken-bond events not yet drained by the caller.
     pub bond_breaks: Vec<BondBreak>,
@@ -500,7 +500,7 @@ impl DemState {
     }
 
     /// Installs stress-free bonds between all pairs whose surfaces are closer than
-    /// `max_gap` [m] (or overlap): the bond's zero-force penetration is the current one.
+    /// `max_gap` \[m\] (or overlap): the bond's zero-force penetration is the current one.
     /// Existing contacts between such pairs become bonded; a neighbour search is forced.
     pub fn install_bonds(&mut self, max_gap: f64) -> Result<usize, DemError> {
         crate::error::check_range("max_gap", max_gap, 0.0, f64::MAX, "[0, ∞)")?;

@@ -20,19 +20,23 @@ use crate::vec3::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+/// Loops shorter than this run serially (rayon's dispatch would cost more than the work);
+/// either way every item is computed by the same code, so the bits do not change.
+const PAR_THRESHOLD: usize = 1024;
+/// Smallest chunk handed to a rayon worker.
 const MIN_PAR_LEN: usize = 256;
 
 /// Parameters of the time integration, as read from a file.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StepperParams {
-    /// Time step Δt [s] (see [`critical_time_step`]).
+    /// Time step Δt \[s\] (see [`critical_time_step`]).
     pub time_step: f64,
     /// Cundall's non-viscous damping `α_d` ∈ [0, 1) (A-Eq. 7; Krzaczek et al. use 0.08).
     pub damping: f64,
-    /// Gravitational acceleration [m/s²].
+    /// Gravitational acceleration \[m/s²\].
     pub gravity: [f64; 3],
-    /// Verlet skin [m]: pairs closer than `R_a + R_b + skin` are listed; the list is rebuilt
+    /// Verlet skin \[m\]: pairs closer than `R_a + R_b + skin` are listed; the list is rebuilt
     /// when a particle or wall moved (or a radius grew) by more than half of it.
     pub verlet_skin: f64,
 }
@@ -115,7 +119,7 @@ impl<L: ContactLaw> Stepper<L> {
         &self.config
     }
 
-    /// Replaces the time step (e.g. after radii changed) [s].
+    /// Replaces the time step (e.g. after radii changed) \[s\].
     pub fn set_time_step(&mut self, dt: f64) -> Result<(), DemError> {
         self.config.params.time_step = check_positive("time_step", dt)?;
         Ok(())
@@ -192,14 +196,25 @@ impl<L: ContactLaw> Stepper<L> {
             return true;
         }
         let half_skin = 0.5 * self.config.params.verlet_skin;
-        let particle_max = p
-            .position
-            .par_iter()
-            .zip(&state.search_reference_position)
-            .zip(p.radius.par_iter().zip(&state.search_reference_radius))
-            .with_min_len(MIN_PAR_LEN)
-            .map(|((x, x0), (r, r0))| (*x - *x0).norm() + (r - r0).max(0.0))
-            .reduce(|| 0.0, f64::max);
+        let displacement = |((x, x0), (r, r0)): ((&Vec3, &Vec3), (&f64, &f64))| {
+            (*x - *x0).norm() + (r - r0).max(0.0)
+        };
+        let particle_max = if p.len() >= PAR_THRESHOLD {
+            p.position
+                .par_iter()
+                .zip(&state.search_reference_position)
+                .zip(p.radius.par_iter().zip(&state.search_reference_radius))
+                .with_min_len(MIN_PAR_LEN)
+                .map(displacement)
+                .reduce(|| 0.0, f64::max)
+        } else {
+            p.position
+                .iter()
+                .zip(&state.search_reference_position)
+                .zip(p.radius.iter().zip(&state.search_reference_radius))
+                .map(displacement)
+                .fold(0.0, f64::max)
+        };
         let wall_max = state
             .walls
             .iter()
@@ -253,13 +268,8 @@ impl<L: ContactLaw> Stepper<L> {
             ..
         } = state;
         let p: &ParticleState = p;
-        contacts
-            .history
-            .par_iter_mut()
-            .zip(contacts.response.par_iter_mut())
-            .zip(contacts.pair.par_iter())
-            .with_min_len(MIN_PAR_LEN)
-            .for_each(|((h, r), pair)| {
+        let particle_contact =
+            |((h, r), pair): ((&mut ContactHistory, &mut ContactResponse), &[u32; 2])| {
                 let (a, b) = (pair[0] as usize, pair[1] as usize);
                 let kin = ContactKinematics::from_pair(
                     p.position[b] - p.position[a],
@@ -284,15 +294,26 @@ impl<L: ContactLaw> Stepper<L> {
                     temperature: 0.5 * (p.temperature[a] + p.temperature[b]),
                 };
                 *r = law.respond(&input, &kin, h);
-            });
+            };
+        if contacts.len() >= PAR_THRESHOLD {
+            contacts
+                .history
+                .par_iter_mut()
+                .zip(contacts.response.par_iter_mut())
+                .zip(contacts.pair.par_iter())
+                .with_min_len(MIN_PAR_LEN)
+                .for_each(particle_contact);
+        } else {
+            contacts
+                .history
+                .iter_mut()
+                .zip(contacts.response.iter_mut())
+                .zip(contacts.pair.iter())
+                .for_each(particle_contact);
+        }
         let walls: &[crate::state::Wall] = walls;
-        wall_contacts
-            .history
-            .par_iter_mut()
-            .zip(wall_contacts.response.par_iter_mut())
-            .zip(wall_contacts.pair.par_iter())
-            .with_min_len(MIN_PAR_LEN)
-            .for_each(|((h, r), pair)| {
+        let wall_contact =
+            |((h, r), pair): ((&mut ContactHistory, &mut ContactResponse), &[u32; 2])| {
                 let (a, w) = (pair[0] as usize, pair[1] as usize);
                 let wall = &walls[w];
                 let kin = ContactKinematics::from_wall(
@@ -311,16 +332,33 @@ impl<L: ContactLaw> Stepper<L> {
                     temperature: p.temperature[a],
                 };
                 *r = law.respond(&input, &kin, h);
-            });
+            };
+        if wall_contacts.len() >= PAR_THRESHOLD {
+            wall_contacts
+                .history
+                .par_iter_mut()
+                .zip(wall_contacts.response.par_iter_mut())
+                .zip(wall_contacts.pair.par_iter())
+                .with_min_len(MIN_PAR_LEN)
+                .for_each(wall_contact);
+        } else {
+            wall_contacts
+                .history
+                .iter_mut()
+                .zip(wall_contacts.response.iter_mut())
+                .zip(wall_contacts.pair.iter())
+                .for_each(wall_contact);
+        }
     }
 
     /// Stage 3: broken-bond events (in contact order) and the forces on the walls.
     pub fn collect_events(&self, state: &mut DemState) {
-        let any_broke = state
-            .contacts
-            .response
-            .par_iter()
-            .any(|r| r.broke.is_some());
+        let broke = |r: &ContactResponse| r.broke.is_some();
+        let any_broke = if state.contacts.len() >= PAR_THRESHOLD {
+            state.contacts.response.par_iter().any(broke)
+        } else {
+            state.contacts.response.iter().any(broke)
+        };
         if any_broke {
             for (pair, r) in state.contacts.pair.iter().zip(&state.contacts.response) {
                 if let Some(mode) = r.broke {
@@ -367,32 +405,42 @@ impl<L: ContactLaw> Stepper<L> {
         let (ws, we) = (&self.wall_csr_start, &self.wall_csr_entry);
         let resp = &contacts.response;
         let wresp = &wall_contacts.response;
-        force
-            .par_iter_mut()
-            .zip(torque.par_iter_mut())
-            .enumerate()
-            .with_min_len(MIN_PAR_LEN)
-            .for_each(|(i, (f, t))| {
-                let mut fi = Vec3::ZERO;
-                let mut ti = Vec3::ZERO;
-                for &e in &ce[cs[i] as usize..cs[i + 1] as usize] {
-                    let r = &resp[(e >> 1) as usize];
-                    if e & 1 == 1 {
-                        fi += r.force_on_b;
-                        ti += r.torque_on_b;
-                    } else {
-                        fi -= r.force_on_b;
-                        ti += r.torque_on_a;
-                    }
-                }
-                for &e in &we[ws[i] as usize..ws[i + 1] as usize] {
-                    let r = &wresp[(e >> 1) as usize];
+        let n = force.len();
+        let gather = |(i, (f, t)): (usize, (&mut Vec3, &mut Vec3))| {
+            let mut fi = Vec3::ZERO;
+            let mut ti = Vec3::ZERO;
+            for &e in &ce[cs[i] as usize..cs[i + 1] as usize] {
+                let r = &resp[(e >> 1) as usize];
+                if e & 1 == 1 {
+                    fi += r.force_on_b;
+                    ti += r.torque_on_b;
+                } else {
                     fi -= r.force_on_b;
                     ti += r.torque_on_a;
                 }
-                *f = fi + external_force[i] + g * mass[i];
-                *t = ti + external_torque[i];
-            });
+            }
+            for &e in &we[ws[i] as usize..ws[i + 1] as usize] {
+                let r = &wresp[(e >> 1) as usize];
+                fi -= r.force_on_b;
+                ti += r.torque_on_a;
+            }
+            *f = fi + external_force[i] + g * mass[i];
+            *t = ti + external_torque[i];
+        };
+        if n >= PAR_THRESHOLD {
+            force
+                .par_iter_mut()
+                .zip(torque.par_iter_mut())
+                .enumerate()
+                .with_min_len(MIN_PAR_LEN)
+                .for_each(gather);
+        } else {
+            force
+                .iter_mut()
+                .zip(torque.iter_mut())
+                .enumerate()
+                .for_each(gather);
+        }
     }
 
     /// Stage 5: damping (A-Eq. 7) and leapfrog update; fixed particles move at their
@@ -414,35 +462,52 @@ impl<L: ContactLaw> Stepper<L> {
             ..
         } = &mut state.particles;
         let planar = kinematics.is_planar();
-        let bad = position
-            .par_iter_mut()
-            .zip(velocity.par_iter_mut())
-            .zip(angular_velocity.par_iter_mut())
-            .enumerate()
-            .with_min_len(MIN_PAR_LEN)
-            .map(|(i, ((x, v), w))| {
-                if !fixed[i] {
-                    let inv_m = 1.0 / mass[i];
-                    let inv_i = 1.0 / inertia[i];
-                    let f = cundall_damping(force[i], *v, dt * inv_m, alpha);
-                    let t = cundall_damping(torque[i], *w, dt * inv_i, alpha);
-                    *v += f * (dt * inv_m);
-                    *w += t * (dt * inv_i);
-                    if planar {
-                        v.z = 0.0;
-                        w.x = 0.0;
-                        w.y = 0.0;
-                    }
+        let n = position.len();
+        let advance = |(i, ((x, v), w)): (usize, ((&mut Vec3, &mut Vec3), &mut Vec3))| {
+            if !fixed[i] {
+                let inv_m = 1.0 / mass[i];
+                let inv_i = 1.0 / inertia[i];
+                let f = cundall_damping(force[i], *v, dt * inv_m, alpha);
+                let t = cundall_damping(torque[i], *w, dt * inv_i, alpha);
+                *v += f * (dt * inv_m);
+                *w += t * (dt * inv_i);
+                if planar {
+                    v.z = 0.0;
+                    w.x = 0.0;
+                    w.y = 0.0;
                 }
-                *x += *v * dt;
-                if !x.is_finite() || !v.is_finite() || !w.is_finite() {
-                    Some(i)
-                } else {
-                    None
-                }
-            })
-            .find_first(|r| r.is_some())
-            .flatten();
+            }
+            *x += *v * dt;
+        };
+        let finite =
+            |((x, v), w): ((&Vec3, &Vec3), &Vec3)| x.is_finite() && v.is_finite() && w.is_finite();
+        let bad = if n >= PAR_THRESHOLD {
+            position
+                .par_iter_mut()
+                .zip(velocity.par_iter_mut())
+                .zip(angular_velocity.par_iter_mut())
+                .enumerate()
+                .with_min_len(MIN_PAR_LEN)
+                .for_each(advance);
+            position
+                .par_iter()
+                .zip(velocity.par_iter())
+                .zip(angular_velocity.par_iter())
+                .with_min_len(MIN_PAR_LEN)
+                .position_first(|item| !finite(item))
+        } else {
+            position
+                .iter_mut()
+                .zip(velocity.iter_mut())
+                .zip(angular_velocity.iter_mut())
+                .enumerate()
+                .for_each(advance);
+            position
+                .iter()
+                .zip(velocity.iter())
+                .zip(angular_velocity.iter())
+                .position(|item| !finite(item))
+        };
         match bad {
             Some(index) => Err(DemError::NonFinite {
                 quantity: "position or velocity",
@@ -547,7 +612,7 @@ fn build_csr(
     }
 }
 
-/// Critical time step estimate [s]: for every free particle `√(m / Σ(K_n + K_s))` over its
+/// Critical time step estimate \[s\]: for every free particle `√(m / Σ(K_n + K_s))` over its
 /// contacts carrying force (or bonded) and `√(I / Σ K_s R²)`, minimised. For a linear
 /// system this is `√2` below the leapfrog stability limit `2/ω_max` (Gershgorin bound on
 /// `ω_max² ≤ 2 Σk/m`). Particles with no contact are given two contacts with a twin.
