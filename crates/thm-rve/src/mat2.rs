@@ -154,9 +154,8 @@ impl Mat2 {
         Self::new(a.x * b.x, a.x * b.y, a.y * b.x, a.y * b.y)
     }
 
-    /// Invariants of a (symmetric part of a) stress: mean `p = tr/2` and the deviatoric
-    /// magnitude `q = √(½ s:s)·√2 = |σ₁ − σ₂|/2·2`… returned as `(p, τ_max)` with
-    /// `τ_max = |σ₁ − σ₂| / 2`.
+    /// Invariants of the symmetric part in 2D: the mean `p = (σ₁ + σ₂)/2` and the largest
+    /// shear `τ_max = |σ₁ − σ₂|/2`, returned as `(p, τ_max)`.
     pub fn invariants_2d(&self) -> (f64, f64) {
         let s = self.symmetric();
         let p = 0.5 * s.trace();

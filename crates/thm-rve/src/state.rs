@@ -141,6 +141,36 @@ impl RveState {
         })
     }
 
+    /// Heap memory held by this state [bytes] (capacities of all its arrays).
+    pub fn heap_bytes(&self) -> usize {
+        fn cap<T>(v: &Vec<T>) -> usize {
+            v.capacity() * std::mem::size_of::<T>()
+        }
+        let d = &self.disks;
+        let c = &self.contacts;
+        let a = &self.anchor;
+        cap(&d.position)
+            + cap(&d.velocity)
+            + cap(&d.angular_velocity)
+            + cap(&d.radius)
+            + cap(&d.reference_radius)
+            + cap(&d.mass)
+            + cap(&d.inertia)
+            + cap(&d.fixed)
+            + cap(&d.external_force)
+            + cap(&d.external_torque)
+            + cap(&d.temperature)
+            + cap(&d.force)
+            + cap(&d.torque)
+            + cap(&c.pair)
+            + cap(&c.shift)
+            + cap(&c.history)
+            + cap(&c.force_on_b)
+            + cap(&c.branch)
+            + cap(&a.reduced_position)
+            + cap(&a.radius)
+    }
+
     /// Number of disks.
     #[inline]
     pub fn len(&self) -> usize {
