@@ -33,7 +33,7 @@ pub struct CellStrain {
 }
 
 impl PeriodicCell {
-    /// A cell from its matrix (columns = basis vectors [m]); the reference configuration is the
+    /// A cell from its matrix (columns = basis vectors \[m\]); the reference configuration is the
     /// given one. Fails with [`RveError::DegenerateCell`] when `det H ≤ 0` or not finite.
     pub fn new(h: Mat2) -> Result<Self, RveError> {
         let h_inv = Self::checked_inverse(&h, "cell")?;
@@ -44,7 +44,7 @@ impl PeriodicCell {
         })
     }
 
-    /// A rectangular cell `width × height` [m].
+    /// A rectangular cell `width × height` \[m\].
     pub fn rectangle(width: f64, height: f64) -> Result<Self, RveError> {
         Self::new(Mat2::diagonal(width, height))
     }
@@ -58,13 +58,13 @@ impl PeriodicCell {
             .ok_or(RveError::DegenerateCell { field, determinant })
     }
 
-    /// The cell matrix **H** [m].
+    /// The cell matrix **H** \[m\].
     #[inline]
     pub fn matrix(&self) -> &Mat2 {
         &self.h
     }
 
-    /// Its inverse **H⁻¹** [1/m].
+    /// Its inverse **H⁻¹** \[1/m\].
     #[inline]
     pub fn inverse(&self) -> &Mat2 {
         &self.h_inv
@@ -81,14 +81,14 @@ impl PeriodicCell {
         self.h_reference = self.h;
     }
 
-    /// Area `det H` [m²].
+    /// Area `det H` \[m²\].
     #[inline]
     pub fn area(&self) -> f64 {
         self.h.det()
     }
 
     /// Perpendicular width of the cell across reduced axis `k` (distance between the faces
-    /// `X_k = 0` and `X_k = 1`) [m].
+    /// `X_k = 0` and `X_k = 1`) \[m\].
     #[inline]
     pub fn width(&self, k: usize) -> f64 {
         1.0 / self.h_inv.row(k).norm()
@@ -106,7 +106,7 @@ impl PeriodicCell {
         self.h.apply(reduced)
     }
 
-    /// The lattice vector `H·s` of an integer image shift `s` [m].
+    /// The lattice vector `H·s` of an integer image shift `s` \[m\].
     #[inline]
     pub fn lattice_vector(&self, shift: [i32; 2]) -> Vec3 {
         self.h

@@ -21,7 +21,7 @@ pub enum RveError {
     DegenerateCell {
         /// Which cell matrix (`cell`, `cell after step n`, ...).
         field: &'static str,
-        /// The determinant [m²].
+        /// The determinant \[m²\].
         determinant: f64,
     },
     /// The cell became too narrow for the periodic search: a pair could touch two images.
@@ -31,9 +31,9 @@ pub enum RveError {
     CellTooSmall {
         /// Axis (0 or 1) across which the cell is too narrow.
         axis: usize,
-        /// Perpendicular width of the cell [m].
+        /// Perpendicular width of the cell \[m\].
         width: f64,
-        /// The smallest allowed width [m].
+        /// The smallest allowed width \[m\].
         minimum: f64,
     },
     /// A radius range with `r_min > r_max` or non-positive radii.
@@ -41,9 +41,9 @@ pub enum RveError {
         "radii out of order: min_radius = {min_radius} m, max_radius = {max_radius} m (need 0 < min ≤ max)"
     )]
     RadiiOutOfOrder {
-        /// Smallest radius [m].
+        /// Smallest radius \[m\].
         min_radius: f64,
-        /// Largest radius [m].
+        /// Largest radius \[m\].
         max_radius: f64,
     },
     /// A consolidation target that the contacts cannot carry at small overlaps.
@@ -51,9 +51,9 @@ pub enum RveError {
         "target stress {target} Pa is not reachable: allowed range (0, {max_reachable}] Pa (mean overlap below 10 % of the smallest radius)"
     )]
     UnreachableTargetStress {
-        /// The requested stress [Pa].
+        /// The requested stress \[Pa\].
         target: f64,
-        /// The largest stress the packing can carry with overlaps below 10 % of `r_min` [Pa].
+        /// The largest stress the packing can carry with overlaps below 10 % of `r_min` \[Pa\].
         max_reachable: f64,
     },
     /// The servo did not reach the target stress within the allowed number of steps.
@@ -61,9 +61,9 @@ pub enum RveError {
         "consolidation to {target} Pa stopped after {steps} steps at mean stress {reached} Pa (tolerance {tolerance})"
     )]
     ConsolidationNotConverged {
-        /// Target [Pa].
+        /// Target \[Pa\].
         target: f64,
-        /// Mean stress reached [Pa].
+        /// Mean stress reached \[Pa\].
         reached: f64,
         /// Steps taken.
         steps: u64,

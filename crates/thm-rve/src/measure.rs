@@ -6,7 +6,7 @@ use crate::params::RveParams;
 use crate::state::RveState;
 use thm_dem::{BondState, Vec3};
 
-/// Homogenised stress of B-Eq. 49 [Pa], compression positive:
+/// Homogenised stress of B-Eq. 49 \[Pa\], compression positive:
 /// `σ = (1/V) Σ_c f^c ⊗ b^c + (1/V) Σ_p m_p v_f^p ⊗ v_f^p` with `f^c` the force on `b` from
 /// `a`, `b^c` the branch vector `a → b` (a repulsive contact gives `f·b > 0`) and `V` the cell
 /// volume `det H · z_p`. The contact part is that of the last force evaluation.
@@ -23,7 +23,7 @@ pub fn stress(state: &RveState, thickness: f64) -> Mat2 {
         .scale(1.0 / volume)
 }
 
-/// Contact part of B-Eq. 49 recomputed from the stored forces and branch vectors [Pa].
+/// Contact part of B-Eq. 49 recomputed from the stored forces and branch vectors \[Pa\].
 pub fn contact_stress(state: &RveState, thickness: f64) -> Mat2 {
     let c = &state.contacts;
     let mut m = Mat2::ZERO;
@@ -41,7 +41,7 @@ fn conducts(state: &RveState, c: usize) -> bool {
         || state.contacts.history[c].bond == BondState::Intact
 }
 
-/// Fabric conductivity tensor of B-Eq. 34 [W/(m K)]:
+/// Fabric conductivity tensor of B-Eq. 34 \[W/(m K)\]:
 /// `k_ij = (1/V) Σ_p r_i r_j / (α l)` over the heat pipes, one per conducting contact, with
 /// `r` the branch vector joining the two centres through the contact, `l = |r|` its length and
 /// `α` the thermal resistance per length. Symmetric by construction; positive definite when the
@@ -64,7 +64,7 @@ pub fn conductivity(state: &RveState, params: &RveParams) -> Mat2 {
 /// A fourth-order 2D tensor `D[α][β][γ][φ]`.
 pub type Tensor4 = [[[[f64; 2]; 2]; 2]; 2];
 
-/// Stiffness tensor of B-Eq. 58 [Pa]:
+/// Stiffness tensor of B-Eq. 58 \[Pa\]:
 /// `D_αβγφ = (1/V) Σ_c (k_n n_α l_β n_γ l_φ + k_t t_α l_β t_γ l_φ)` over the contacts carrying
 /// force, with `n` the unit normal, `t` the unit tangent and `l` the branch vector.
 pub fn stiffness(state: &RveState, params: &RveParams) -> Tensor4 {
@@ -102,7 +102,7 @@ pub fn stiffness(state: &RveState, params: &RveParams) -> Tensor4 {
     d
 }
 
-/// Kinetic energy of the fluctuating motion (translation and rotation) [J].
+/// Kinetic energy of the fluctuating motion (translation and rotation) \[J\].
 pub fn kinetic_energy(state: &RveState) -> f64 {
     let d = &state.disks;
     let mut e = 0.0;
@@ -113,7 +113,7 @@ pub fn kinetic_energy(state: &RveState) -> f64 {
     e
 }
 
-/// Elastic energy stored in the contact springs at the last evaluation [J]:
+/// Elastic energy stored in the contact springs at the last evaluation \[J\]:
 /// `Σ (F_n² / 2k_n + |F_t|² / 2k_t)`.
 pub fn elastic_energy(state: &RveState, params: &RveParams) -> f64 {
     let (kn, kt) = (

@@ -28,9 +28,9 @@ use thm_dem::Vec3;
 pub struct PackingParams {
     /// Number of disks (the paper uses 400).
     pub disk_count: usize,
-    /// Smallest radius [m].
+    /// Smallest radius \[m\].
     pub min_radius: f64,
-    /// Largest radius [m].
+    /// Largest radius \[m\].
     pub max_radius: f64,
     /// Solid fraction of the loose initial cloud ∈ (0, 0.5].
     pub initial_solid_fraction: f64,
@@ -134,7 +134,7 @@ pub fn random_packing(params: &PackingParams, config: &RveConfig) -> Result<RveS
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ConsolidationParams {
-    /// Target isotropic stress σ₀ [Pa] (compression positive).
+    /// Target isotropic stress σ₀ \[Pa\] (compression positive).
     pub target_stress: f64,
     /// Relative tolerance on each normal stress, `|σ_kk − σ₀| ≤ tol σ₀`.
     pub tolerance: f64,
@@ -186,7 +186,7 @@ impl ConsolidationParams {
 pub struct ConsolidationReport {
     /// DEM steps taken.
     pub steps: u64,
-    /// Stress reached [Pa] (B-Eq. 49, compression positive).
+    /// Stress reached \[Pa\] (B-Eq. 49, compression positive).
     pub stress: Mat2,
     /// Void ratio reached.
     pub void_ratio: f64,
@@ -194,11 +194,11 @@ pub struct ConsolidationReport {
     pub coordination_number: f64,
     /// Unbalanced-force ratio at the end.
     pub unbalanced_ratio: f64,
-    /// DEM time step used [s].
+    /// DEM time step used \[s\].
     pub time_step: f64,
 }
 
-/// A stable DEM time step `fraction · √(m_min / k_n)` [s].
+/// A stable DEM time step `fraction · √(m_min / k_n)` \[s\].
 pub fn time_step(state: &RveState, config: &RveConfig, fraction: f64) -> f64 {
     let m_min = state
         .disks
@@ -210,7 +210,7 @@ pub fn time_step(state: &RveState, config: &RveConfig, fraction: f64) -> f64 {
 
 /// Largest isotropic stress the contacts carry with a mean overlap of 10 % of the smallest
 /// radius, estimated as `σ ≈ Z/2 · k_n δ / (d̄ z_p)` per unit area with a coordination number
-/// of 4 and the mean diameter `d̄` [Pa].
+/// of 4 and the mean diameter `d̄` \[Pa\].
 pub fn max_reachable_stress(state: &RveState, config: &RveConfig) -> f64 {
     let r = &state.disks.reference_radius;
     let r_min = r.iter().fold(f64::INFINITY, |m, &v| m.min(v));

@@ -11,16 +11,16 @@ pub struct RveParams {
     /// Linear spring + Coulomb contact law with the optional thermally sensitive bond
     /// (B-Eqs. 35–40; `thm-dem`).
     pub contact: LinearSpringParams,
-    /// Solid density ρ [kg/m³].
+    /// Solid density ρ \[kg/m³\].
     pub density: f64,
-    /// Fictitious out-of-plane thickness `z_p` [m] (Zhao et al. 2022 use 75 mm): the RVE
+    /// Fictitious out-of-plane thickness `z_p` \[m\] (Zhao et al. 2022 use 75 mm): the RVE
     /// volume is `V = det H · z_p` and a disk's mass `ρ π R² z_p`.
     pub thickness: f64,
-    /// Linear thermal expansion coefficient β [1/K] (B-Eq. 37).
+    /// Linear thermal expansion coefficient β \[1/K\] (B-Eq. 37).
     pub thermal_expansion_coefficient: f64,
-    /// Temperature at which the disks have their reference radii [K] (B-Eq. 37).
+    /// Temperature at which the disks have their reference radii \[K\] (B-Eq. 37).
     pub reference_temperature: f64,
-    /// Thermal resistance per length of a heat pipe α [K/(W m)] (B-Eq. 34).
+    /// Thermal resistance per length of a heat pipe α \[K/(W m)\] (B-Eq. 34).
     pub thermal_resistance: f64,
     /// Cundall's local non-viscous damping ∈ [0, 1) on the fluctuating motion (0 for the
     /// energy balance; consolidation sets its own).

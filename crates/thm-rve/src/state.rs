@@ -22,9 +22,9 @@ pub struct PeriodicContacts {
     pub shift: Vec<[i32; 2]>,
     /// History per pair (shear force, previous normal, bond state).
     pub history: Vec<ContactHistory>,
-    /// Force on `b` from `a` at the last evaluation [N] (zero when not touching).
+    /// Force on `b` from `a` at the last evaluation \[N\] (zero when not touching).
     pub force_on_b: Vec<Vec3>,
-    /// Branch vector `a → image of b` at the last evaluation [m].
+    /// Branch vector `a → image of b` at the last evaluation \[m\].
     pub branch: Vec<Vec3>,
 }
 
@@ -82,9 +82,9 @@ pub struct VerletAnchor {
     pub reduced_position: Vec<Vec3>,
     /// Cell matrix at the build.
     pub cell: Mat2,
-    /// Radii at the build [m].
+    /// Radii at the build \[m\].
     pub radius: Vec<f64>,
-    /// Skin used at the build [m]; 0 means "no list yet".
+    /// Skin used at the build \[m\]; 0 means "no list yet".
     pub skin: f64,
 }
 
@@ -102,17 +102,17 @@ pub struct RveState {
     pub anchor: VerletAnchor,
     /// DEM steps taken.
     pub step: u64,
-    /// Time [s].
+    /// Time \[s\].
     pub time: f64,
-    /// Friction heat of all steps so far, `Σ E_f` of B-Eq. 32 [J].
+    /// Friction heat of all steps so far, `Σ E_f` of B-Eq. 32 \[J\].
     pub friction_heat_total: f64,
-    /// Contact part `Σ f ⊗ b` of B-Eq. 49 at the last force evaluation [N m].
+    /// Contact part `Σ f ⊗ b` of B-Eq. 49 at the last force evaluation \[N m\].
     pub contact_moment: Mat2,
 }
 
 impl RveState {
-    /// Disks at rest from centres [m] and radii [m] in a cell; `density` [kg/m³] and the
-    /// fictitious `thickness` [m] give masses `ρ π R² z_p`; all disks at `temperature` [K] with
+    /// Disks at rest from centres \[m\] and radii \[m\] in a cell; `density` \[kg/m³\] and the
+    /// fictitious `thickness` \[m\] give masses `ρ π R² z_p`; all disks at `temperature` \[K\] with
     /// their reference radii.
     pub fn new(
         cell: PeriodicCell,
@@ -141,7 +141,7 @@ impl RveState {
         })
     }
 
-    /// Heap memory held by this state [bytes] (capacities of all its arrays).
+    /// Heap memory held by this state \[bytes\] (capacities of all its arrays).
     pub fn heap_bytes(&self) -> usize {
         fn cap<T>(v: &Vec<T>) -> usize {
             v.capacity() * std::mem::size_of::<T>()
@@ -183,13 +183,13 @@ impl RveState {
         self.disks.is_empty()
     }
 
-    /// RVE volume `V = det H · z_p` [m³].
+    /// RVE volume `V = det H · z_p` \[m³\].
     #[inline]
     pub fn volume(&self, thickness: f64) -> f64 {
         self.cell.area() * thickness
     }
 
-    /// Solid area `Σ π R²` [m²].
+    /// Solid area `Σ π R²` \[m²\].
     pub fn solid_area(&self) -> f64 {
         self.disks
             .radius

@@ -28,11 +28,11 @@ use thm_dem::{ContactHistory, ContactKinematics, ContactLaw, PairInput, Vec3};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RveLoad {
-    /// Velocity gradient **L** [1/s], held over the step.
+    /// Velocity gradient **L** \[1/s\], held over the step.
     pub velocity_gradient: Mat2,
-    /// Temperature of the material point [K].
+    /// Temperature of the material point \[K\].
     pub temperature: f64,
-    /// Macroscopic time step Δt [s].
+    /// Macroscopic time step Δt \[s\].
     pub dt: f64,
     /// DEM steps per macroscopic step `N` (B-Eq. 33); the DEM step is `Δt / N`.
     pub substeps: u32,
@@ -41,11 +41,11 @@ pub struct RveLoad {
 /// What the RVE returns to its material point.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct RveResponse {
-    /// Homogenised stress σ of B-Eq. 49 [Pa], compression positive (the paper's sign).
+    /// Homogenised stress σ of B-Eq. 49 \[Pa\], compression positive (the paper's sign).
     pub stress: Mat2,
-    /// Friction heat source `Q = Σ E_f / (V N Δt_D)` of B-Eq. 33 [W/m³].
+    /// Friction heat source `Q = Σ E_f / (V N Δt_D)` of B-Eq. 33 \[W/m³\].
     pub heat_source: f64,
-    /// Fabric conductivity tensor of B-Eq. 34 [W/(m K)].
+    /// Fabric conductivity tensor of B-Eq. 34 \[W/(m K)\].
     pub conductivity: Mat2,
 }
 
@@ -84,7 +84,7 @@ impl RveStepper {
     }
 
     /// One DEM step of `dt` under the velocity gradient `l`. Returns the friction heat of the
-    /// step, `E_f` of B-Eq. 32 [J].
+    /// step, `E_f` of B-Eq. 32 \[J\].
     pub fn step(&mut self, state: &mut RveState, l: &Mat2, dt: f64) -> Result<f64, RveError> {
         self.update_neighbours(state)?;
         let heat = self.compute_contact_forces(state, l, dt);
@@ -95,7 +95,7 @@ impl RveStepper {
         Ok(heat)
     }
 
-    /// Verlet skin [m] of this configuration for a state.
+    /// Verlet skin \[m\] of this configuration for a state.
     fn skin(&self, state: &RveState) -> f64 {
         let r_min = state
             .disks
@@ -188,7 +188,7 @@ impl RveStepper {
 
     /// Stage 2: contact forces at the present configuration. Clears and fills the disk
     /// force and torque arrays, the per-contact force and branch, and the contact moment
-    /// `Σ f ⊗ b`. Returns the friction work of the step (B-Eq. 32) [J].
+    /// `Σ f ⊗ b`. Returns the friction work of the step (B-Eq. 32) \[J\].
     pub fn compute_contact_forces(&self, state: &mut RveState, l: &Mat2, dt: f64) -> f64 {
         let law = self.config.law();
         let disks = &mut state.disks;

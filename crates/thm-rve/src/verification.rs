@@ -110,7 +110,7 @@ fn consolidation_case() -> Result<CaseOutput, CaseError> {
 }
 
 /// Constrained compression `Δε_yy` (ε_xx = 0) of a consolidated packing with friction μ,
-/// loaded slowly with damping and relaxed; returns `(K + G, K − G)` [Pa].
+/// loaded slowly with damping and relaxed; returns `(K + G, K − G)` \[Pa\].
 pub fn constrained_compression(
     config: &RveConfig,
     state: &mut RveState,
@@ -209,7 +209,7 @@ fn void_ratio_case() -> Result<CaseOutput, CaseError> {
 }
 
 /// Shears a consolidated packing (μ = 0.5, no damping) through `respond` calls of `substeps`
-/// DEM steps; returns `(Σ Q V Δt, Σ E_f)` [J]: the heat returned by B-Eq. 33 and the sliding
+/// DEM steps; returns `(Σ Q V Δt, Σ E_f)` \[J\]: the heat returned by B-Eq. 33 and the sliding
 /// work of B-Eq. 32 summed step by step.
 pub fn heat_ledger(
     config: &RveConfig,
@@ -237,7 +237,7 @@ pub fn heat_ledger(
 }
 
 /// Shears a consolidated packing (μ = 0.5, no damping) by `steps` DEM steps of
-/// `fraction · Δt` at the same shear rate; returns `(W, ΔE, D)` [J]: the boundary work
+/// `fraction · Δt` at the same shear rate; returns `(W, ΔE, D)` \[J\]: the boundary work
 /// `−Σ_n (Σ_c f⊗b) : L Δt`, the change of elastic plus kinetic energy and the friction heat.
 pub fn energy_ledger(
     config: &RveConfig,
