@@ -17,7 +17,11 @@ fn bench_batch(c: &mut Criterion) {
         .and_then(|s| s.parse().ok())
         .unwrap_or(800);
     let (config, packing, report) = consolidated_packing(400, 1, 0.01).unwrap();
-    let config = config.with_friction(0.5).unwrap().with_damping(0.1).unwrap();
+    let config = config
+        .with_friction(0.5)
+        .unwrap()
+        .with_damping(0.1)
+        .unwrap();
     let dt = report.time_step;
     let disks = packing.len();
     let load = RveLoad {

@@ -79,9 +79,9 @@
 //!    with μ = 0.001 (B-Table 1) gives the paper's order only when compressed with μ = 0.5; a
 //!    nearly frictionless packing has a tiny shear modulus (ν ≈ 0.76). See the verification.
 //! 10. *Energy.* The heat returned equals the sliding work to round-off; the cell's mechanical
-//!    energy balance (boundary work = Δ elastic + Δ kinetic + friction heat) closes only to
-//!    first order in Δt with explicit integration (≈ 4·10⁻⁴ at 0.2 √(m/k_n), tested to shrink
-//!    4× with Δt/4), not to 10⁻⁹.
+//!     energy balance (boundary work = Δ elastic + Δ kinetic + friction heat) closes only to
+//!     first order in Δt with explicit integration (≈ 4·10⁻⁴ at 0.2 √(m/k_n), tested to
+//!     shrink 4× with Δt/4), not to 10⁻⁹.
 //!
 //! ## Units and validity
 //!
