@@ -29,7 +29,7 @@ pub fn cases() -> Vec<Case> {
         Case {
             name: "rve_isotropic_consolidation",
             description: "400 disks, radii [0.25, 0.5] mm, k_n = k_t = 1e6 N/m, servo to 100 kPa (B-Sect. 5.2.2)",
-            quick: false,
+            quick: true,
             run: consolidation_case,
         },
         Case {
