@@ -47,8 +47,7 @@
 //! 1. *Sign of B-Eq. 49.* `f^c` is the force on disk `b` from disk `a`, `b^c` points from `a`
 //!    to `b`: a repulsive contact gives `f·b > 0`, so σ is **compression positive**, the
 //!    geomechanics convention of the paper's figures; the kinetic term then enters with `+`
-//!    (momentum flux acts as a pressure). `thm-coupling` flips the sign for a tension-positive
-//!    continuum.
+//!    (momentum flux acts as a pressure). A tension-positive continuum takes `−σ`.
 //! 2. *B-Eqs. 45a and 46b* are garbled (`Ḣ_ii P_i`, `Ḣ_ik H⁻¹_ki`); read as `v_h(p') = v_h(p) +
 //!    Ḣ P` and `L = Ḣ H⁻¹`, the only dimensionally consistent forms.
 //! 3. *Fluctuating dynamics.* `m v̇_f = F` (the pseudo-force `−m L v_f` of a moving frame is
