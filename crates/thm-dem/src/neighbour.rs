@@ -60,6 +60,10 @@ impl CellGrid {
         self.cell_size = h;
         self.dims = dims;
         let n_cells = dims[0] * dims[1] * dims[2];
+        // Reserve the largest grid once, so a growing bounding box never reallocates.
+        self.cell_start.clear();
+        self.cell_start.reserve(max_cells + 1);
+        self.scratch.reserve(max_cells + 1);
         self.cell_of.clear();
         self.cell_start.clear();
         self.cell_start.resize(n_cells + 1, 0);

@@ -230,6 +230,16 @@ impl<L: ContactLaw> Stepper<L> {
             .pairs_within(&state.particles, skin, &mut self.candidates);
         merge_contacts(&state.contacts, &self.candidates, &mut self.merged);
         std::mem::swap(&mut state.contacts, &mut self.merged);
+        // Keep 25 % headroom in the contact buffers so that the pair count may fluctuate
+        // without reallocating.
+        let headroom = state.contacts.len() + state.contacts.len() / 4 + 16;
+        reserve_to(&mut self.candidates, headroom);
+        reserve_to(&mut self.merged.pair, headroom);
+        reserve_to(&mut self.merged.history, headroom);
+        reserve_to(&mut self.merged.response, headroom);
+        reserve_to(&mut state.contacts.pair, headroom);
+        reserve_to(&mut state.contacts.history, headroom);
+        reserve_to(&mut state.contacts.response, headroom);
 
         self.candidates.clear();
         let p = &state.particles;
@@ -516,6 +526,12 @@ impl<L: ContactLaw> Stepper<L> {
             }),
             None => Ok(()),
         }
+    }
+}
+
+fn reserve_to<T>(v: &mut Vec<T>, capacity: usize) {
+    if v.capacity() < capacity {
+        v.reserve(capacity - v.len());
     }
 }
 
