@@ -20,6 +20,7 @@ pub struct PeriodicGrid {
     bin_of: Vec<u32>,
     bin_start: Vec<u32>,
     sorted: Vec<u32>,
+    cursor: Vec<u32>,
     reduced: Vec<Vec3>,
 }
 
@@ -93,12 +94,11 @@ impl PeriodicGrid {
         }
         self.sorted.clear();
         self.sorted.resize(n, 0);
-        {
-            let mut cursor: Vec<u32> = self.bin_start[..bins].to_vec();
-            for (i, &c) in self.bin_of.iter().enumerate() {
-                self.sorted[cursor[c as usize] as usize] = i as u32;
-                cursor[c as usize] += 1;
-            }
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.bin_start[..bins]);
+        for (i, &c) in self.bin_of.iter().enumerate() {
+            self.sorted[self.cursor[c as usize] as usize] = i as u32;
+            self.cursor[c as usize] += 1;
         }
         for a in 0..n {
             let c = self.bin_of[a] as usize;
