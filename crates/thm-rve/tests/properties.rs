@@ -87,6 +87,31 @@ proptest! {
         prop_assert!(close(ra.heat_source, rb.heat_source, ra.heat_source.abs().max(1e-30), 1e-6));
     }
 
+    /// Without damping, contact forces are pairwise equal and opposite, so the total
+    /// fluctuating momentum `Σ m v_f` is conserved (here: stays zero) under any velocity
+    /// gradient.
+    #[test]
+    fn fluctuating_momentum_is_conserved_without_damping(
+        lxx in -1.0..1.0f64, lxy in -1.0..1.0f64, lyx in -1.0..1.0f64, lyy in -1.0..1.0f64,
+    ) {
+        let (config, base, dt) = packing();
+        let config = config.with_damping(0.0).unwrap();
+        let mut s = base.clone();
+        s.disks.velocity.iter_mut().for_each(|v| *v = thm_dem::Vec3::ZERO);
+        let l = Mat2::new(lxx, lxy, lyx, lyy).scale(2e-5 / dt);
+        let mut stepper = RveStepper::new(config);
+        let mut scale = 0.0_f64;
+        for _ in 0..300 {
+            stepper.step(&mut s, &l, *dt).unwrap();
+            for (m, v) in s.disks.mass.iter().zip(&s.disks.velocity) {
+                scale = scale.max(m * v.norm());
+            }
+        }
+        let p = s.disks.momentum();
+        prop_assert!(scale > 0.0);
+        prop_assert!(p.norm() <= 1e-12 * scale * s.len() as f64, "momentum {p:?} vs scale {scale}");
+    }
+
     /// The fabric conductivity tensor of a connected (consolidated) packing is symmetric and
     /// positive definite, whatever its orientation.
     #[test]
