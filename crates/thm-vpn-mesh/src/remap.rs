@@ -62,51 +62,61 @@ pub struct RemapOperator {
     new_adjacency: Vec<[u32; 3]>,
 }
 
-type Poly = ([[f64; 2]; 9], usize);
-
-fn poly_area(p: &Poly) -> f64 {
-    let (v, n) = p;
-    let mut s = 0.0;
-    for k in 0..*n {
-        let (a, b) = (v[k], v[(k + 1) % *n]);
-        s += a[0] * b[1] - a[1] * b[0];
-    }
-    0.5 * s
-}
-
 /// Area of the intersection of two counter-clockwise triangles.
 pub fn triangle_overlap_area(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3]) -> f64 {
-    let mut cur: Poly = ([[0.0; 2]; 9], 3);
-    cur.0[..3].copy_from_slice(a);
-    let mut next: Poly = ([[0.0; 2]; 9], 0);
+    let mut cur = [[0.0f64; 2]; 9];
+    cur[..3].copy_from_slice(a);
+    let mut n = 3usize;
+    let mut next = [[0.0f64; 2]; 9];
+    let mut side = [0.0f64; 9];
     for k in 0..3 {
-        let (p0, p1) = (b[k], b[(k + 1) % 3]);
+        let p0 = b[k];
+        let p1 = b[if k == 2 { 0 } else { k + 1 }];
         let e = [p1[0] - p0[0], p1[1] - p0[1]];
-        let side = |x: [f64; 2]| e[0] * (x[1] - p0[1]) - e[1] * (x[0] - p0[0]);
-        next.1 = 0;
-        let n = cur.1;
+        let mut all_in = true;
+        let mut any_in = false;
         for i in 0..n {
-            let (u, v) = (cur.0[i], cur.0[(i + 1) % n]);
-            let (su, sv) = (side(u), side(v));
+            let s = e[0] * (cur[i][1] - p0[1]) - e[1] * (cur[i][0] - p0[0]);
+            side[i] = s;
+            all_in &= s >= 0.0;
+            any_in |= s >= 0.0;
+        }
+        if all_in {
+            continue;
+        }
+        if !any_in {
+            return 0.0;
+        }
+        let mut m = 0usize;
+        for i in 0..n {
+            let j = if i + 1 == n { 0 } else { i + 1 };
+            let (su, sv) = (side[i], side[j]);
             if su >= 0.0 {
-                next.0[next.1] = u;
-                next.1 += 1;
+                next[m] = cur[i];
+                m += 1;
             }
-            if (su >= 0.0) != (sv >= 0.0) {
+            if (su >= 0.0) != (sv >= 0.0) && m < 9 {
                 let t = su / (su - sv);
-                next.0[next.1] = [u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1])];
-                next.1 += 1;
+                let (u, v) = (cur[i], cur[j]);
+                next[m] = [u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1])];
+                m += 1;
             }
-            if next.1 >= 8 {
+            if m >= 9 {
                 break;
             }
         }
         std::mem::swap(&mut cur, &mut next);
-        if cur.1 < 3 {
+        n = m;
+        if n < 3 {
             return 0.0;
         }
     }
-    poly_area(&cur).max(0.0)
+    let mut s = 0.0;
+    for i in 0..n {
+        let (p, q) = (cur[i], cur[if i + 1 == n { 0 } else { i + 1 }]);
+        s += p[0] * q[1] - p[1] * q[0];
+    }
+    (0.5 * s).max(0.0)
 }
 
 fn tri_points(m: &PoreMesh, c: usize) -> [[f64; 2]; 3] {
