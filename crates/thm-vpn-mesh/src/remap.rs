@@ -175,9 +175,11 @@ impl RemapOperator {
             let iy = |y: f64| (((y - lo[1]) / hy).floor().max(0.0) as usize).min(ny - 1);
             (ix(a[0]), ix(b[0]), iy(a[1]), iy(b[1]), a, b)
         };
+        // Packed corner coordinates of the new cells (one contiguous record per cell).
+        let new_tri: Vec<[[f64; 2]; 3]> = (0..nn).map(|c| tri_points(new, c)).collect();
         let mut start = vec![0u32; nx * ny + 1];
         for c in 0..nn {
-            let (x0, x1, y0, y1, ..) = bin_range(&tri_points(new, c));
+            let (x0, x1, y0, y1, ..) = bin_range(&new_tri[c]);
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     start[y * nx + x + 1] += 1;
@@ -190,7 +192,7 @@ impl RemapOperator {
         let mut items = vec![0u32; start[nx * ny] as usize];
         let mut fill = start.clone();
         for c in 0..nn {
-            let (x0, x1, y0, y1, ..) = bin_range(&tri_points(new, c));
+            let (x0, x1, y0, y1, ..) = bin_range(&new_tri[c]);
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     let b = y * nx + x;
@@ -201,7 +203,7 @@ impl RemapOperator {
         }
         let mut new_bbox = Vec::with_capacity(nn);
         for c in 0..nn {
-            let (.., a, b) = bin_range(&tri_points(new, c));
+            let (.., a, b) = bin_range(&new_tri[c]);
             new_bbox.push((a, b));
         }
         let mut new_adjacency = vec![[NONE; 3]; nn];
@@ -240,18 +242,26 @@ impl RemapOperator {
                 let seed = items[start[bin] as usize..start[bin + 1] as usize]
                     .iter()
                     .copied()
-                    .find(|&c| contains(&tri_points(new, c as usize), g));
+                    .find(|&c| contains(&new_tri[c as usize], g));
                 match seed {
                     Some(s) => {
                         let (.., a, b) = bin_range(&p);
                         stamp[s as usize] = tag;
                         stack.push(s);
                         while let Some(c) = stack.pop() {
-                            let (ca, cb) = new_bbox[c as usize];
-                            if ca[0] >= b[0] || cb[0] <= a[0] || ca[1] >= b[1] || cb[1] <= a[1] {
+                            let t = &new_tri[c as usize];
+                            let (tx0, tx1) = (
+                                t[0][0].min(t[1][0]).min(t[2][0]),
+                                t[0][0].max(t[1][0]).max(t[2][0]),
+                            );
+                            let (ty0, ty1) = (
+                                t[0][1].min(t[1][1]).min(t[2][1]),
+                                t[0][1].max(t[1][1]).max(t[2][1]),
+                            );
+                            if tx0 >= b[0] || tx1 <= a[0] || ty0 >= b[1] || ty1 <= a[1] {
                                 continue;
                             }
-                            let ov = triangle_overlap_area(&p, &tri_points(new, c as usize));
+                            let ov = triangle_overlap_area(&p, &new_tri[c as usize]);
                             if ov > 0.0 {
                                 target.push(c);
                                 area.push(ov);
@@ -279,8 +289,7 @@ impl RemapOperator {
                                     {
                                         continue;
                                     }
-                                    let ov =
-                                        triangle_overlap_area(&p, &tri_points(new, c as usize));
+                                    let ov = triangle_overlap_area(&p, &new_tri[c as usize]);
                                     if ov > 0.0 {
                                         target.push(c);
                                         area.push(ov);
