@@ -178,8 +178,8 @@ impl RemapOperator {
         // Packed corner coordinates of the new cells (one contiguous record per cell).
         let new_tri: Vec<[[f64; 2]; 3]> = (0..nn).map(|c| tri_points(new, c)).collect();
         let mut start = vec![0u32; nx * ny + 1];
-        for c in 0..nn {
-            let (x0, x1, y0, y1, ..) = bin_range(&new_tri[c]);
+        for t in &new_tri {
+            let (x0, x1, y0, y1, ..) = bin_range(t);
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     start[y * nx + x + 1] += 1;
@@ -191,8 +191,8 @@ impl RemapOperator {
         }
         let mut items = vec![0u32; start[nx * ny] as usize];
         let mut fill = start.clone();
-        for c in 0..nn {
-            let (x0, x1, y0, y1, ..) = bin_range(&new_tri[c]);
+        for (c, t) in new_tri.iter().enumerate() {
+            let (x0, x1, y0, y1, ..) = bin_range(t);
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     let b = y * nx + x;
@@ -201,11 +201,13 @@ impl RemapOperator {
                 }
             }
         }
-        let mut new_bbox = Vec::with_capacity(nn);
-        for c in 0..nn {
-            let (.., a, b) = bin_range(&new_tri[c]);
-            new_bbox.push((a, b));
-        }
+        let new_bbox: Vec<([f64; 2], [f64; 2])> = new_tri
+            .iter()
+            .map(|t| {
+                let (.., a, b) = bin_range(t);
+                (a, b)
+            })
+            .collect();
         let mut new_adjacency = vec![[NONE; 3]; nn];
         for (c, faces) in new.cell_faces.iter().enumerate() {
             for k in 0..3 {
