@@ -99,7 +99,9 @@
 //! `mean_k [v_k + ω_k ẑ×(y_k − c_k) + (ṙ_k/r_k)(y_k − c_k)]`; box-side vertices keep their
 //! normal coordinate, corners are fixed. The cell area rate is the exact derivative of the
 //! triangle area, `dA/dt = ½[(u_b − u_a)×(p_c − p_a) + (p_b − p_a)×(u_c − u_a)]`, and
-//! `dV/dt = thickness · dA/dt`. With a box outline the rates sum to zero to round-off.
+//! `dV/dt = thickness · dA/dt`. With a box outline the rates sum to zero to round-off. The
+//! T2T apertures (A-Eq. 9) are recomputed on the moved triangles; the S2S apertures follow the
+//! contact stresses through [`PackingMesh::update_s2s_apertures`].
 //!
 //! ## Remesh trigger
 //!

@@ -518,6 +518,32 @@ impl PoreMesh {
         }
     }
 
+    /// Recomputes the aperture (A-Eq. 9) of every existing T2T channel from the current
+    /// geometry, in place (channel order and indices unchanged; call after
+    /// [`Self::update_geometry`]).
+    pub fn update_t2t_apertures(&mut self, reduction_factor: f64) {
+        for ch in 0..self.channels.len() {
+            if self.channels.kind[ch] != ChannelKind::T2T {
+                continue;
+            }
+            let f = self.channels.face[ch] as usize;
+            let [c0, c1] = self.channels.cells[ch];
+            let (p0, p1) = (
+                self.cell_centroid[c0 as usize],
+                self.cell_centroid[c1 as usize],
+            );
+            let d = [p1[0] - p0[0], p1[1] - p0[1]];
+            let length = (d[0] * d[0] + d[1] * d[1]).sqrt();
+            let n = self.face_normal[f];
+            let sin_omega = if length > 0.0 {
+                (n[0] * d[0] + n[1] * d[1]).abs() / length
+            } else {
+                0.0
+            };
+            self.channels.aperture[ch] = reduction_factor * self.face_length[f] * sin_omega;
+        }
+    }
+
     /// Rebuilds all T2T channels (dropping existing ones of that kind) with aperture
     /// `h = γ · e · cos(90° − ω)` (A-Eq. 9), where `e` is the shared edge length and `ω` the
     /// angle between the edge and the line joining the two centroids.

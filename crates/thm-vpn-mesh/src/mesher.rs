@@ -242,6 +242,9 @@ pub struct PackingMesh {
     pub circle_cells: Vec<u32>,
     /// For each solid cell, the circle (index into `circles`) it belongs to; [`NONE`] for fluid.
     pub cell_circle: Vec<u32>,
+    /// The T2T reduction factor γ the mesh was built with (A-Eq. 9), used to refresh the T2T
+    /// apertures as the mesh moves.
+    pub t2t_reduction_factor: f64,
 }
 
 impl PackingMesh {
@@ -250,6 +253,34 @@ impl PackingMesh {
         let a = self.circle_cell_offsets[i] as usize;
         let b = self.circle_cell_offsets[i + 1] as usize;
         &self.circle_cells[a..b]
+    }
+
+    /// Sets the S2S apertures (A-Eq. 8) from the current normal stress of each contact (same
+    /// order as the contacts given to the mesher) [Pa], between remeshes.
+    pub fn update_s2s_apertures(
+        &mut self,
+        normal_stress: &[f64],
+        law: &S2sApertureParams,
+    ) -> Result<(), MeshError> {
+        if normal_stress.len() != self.contact_channel.len() {
+            return Err(MeshError::LengthMismatch {
+                what: "normal_stress (one per contact at mesh time)",
+                expected: self.contact_channel.len(),
+                got: normal_stress.len(),
+            });
+        }
+        for (k, (&ch, &s)) in self.contact_channel.iter().zip(normal_stress).enumerate() {
+            if !s.is_finite() {
+                return Err(MeshError::NonFiniteStress {
+                    contact: k,
+                    value: s,
+                });
+            }
+            if ch != NONE {
+                self.mesh.channels.aperture[ch as usize] = law.aperture(s);
+            }
+        }
+        Ok(())
     }
 
     /// Total solid area of circle `i` [m²].
@@ -1554,5 +1585,6 @@ pub fn mesh_packing(
         circle_cell_offsets,
         circle_cells,
         cell_circle,
+        t2t_reduction_factor: prm.t2t_reduction_factor,
     })
 }

@@ -309,7 +309,7 @@ impl MeshMotion {
     }
 
     /// Stage sequence: validate the state, vertex kinematics, move the vertices, recompute the
-    /// geometry, and compute every cell's volume rate dV/dt [m³/s] (see [`Self::volume_rate`]).
+    /// geometry and the T2T apertures (A-Eq. 9 follows the triangles), and compute every cell's volume rate dV/dt [m³/s] (see [`Self::volume_rate`]).
     pub fn update(
         &mut self,
         pm: &mut PackingMesh,
@@ -333,6 +333,7 @@ impl MeshMotion {
             &mut self.velocity,
         );
         pm.mesh.update_geometry();
+        pm.mesh.update_t2t_apertures(pm.t2t_reduction_factor);
         self.volume_rate.resize(pm.mesh.n_cells(), 0.0);
         area_rate_into(&pm.mesh, &self.velocity, &mut self.volume_rate);
         let t = pm.mesh.thickness;

@@ -62,51 +62,61 @@ pub struct RemapOperator {
     new_adjacency: Vec<[u32; 3]>,
 }
 
-type Poly = ([[f64; 2]; 9], usize);
-
-fn poly_area(p: &Poly) -> f64 {
-    let (v, n) = p;
-    let mut s = 0.0;
-    for k in 0..*n {
-        let (a, b) = (v[k], v[(k + 1) % *n]);
-        s += a[0] * b[1] - a[1] * b[0];
-    }
-    0.5 * s
-}
-
 /// Area of the intersection of two counter-clockwise triangles.
 pub fn triangle_overlap_area(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3]) -> f64 {
-    let mut cur: Poly = ([[0.0; 2]; 9], 3);
-    cur.0[..3].copy_from_slice(a);
-    let mut next: Poly = ([[0.0; 2]; 9], 0);
+    let mut cur = [[0.0f64; 2]; 9];
+    cur[..3].copy_from_slice(a);
+    let mut n = 3usize;
+    let mut next = [[0.0f64; 2]; 9];
+    let mut side = [0.0f64; 9];
     for k in 0..3 {
-        let (p0, p1) = (b[k], b[(k + 1) % 3]);
+        let p0 = b[k];
+        let p1 = b[if k == 2 { 0 } else { k + 1 }];
         let e = [p1[0] - p0[0], p1[1] - p0[1]];
-        let side = |x: [f64; 2]| e[0] * (x[1] - p0[1]) - e[1] * (x[0] - p0[0]);
-        next.1 = 0;
-        let n = cur.1;
+        let mut all_in = true;
+        let mut any_in = false;
         for i in 0..n {
-            let (u, v) = (cur.0[i], cur.0[(i + 1) % n]);
-            let (su, sv) = (side(u), side(v));
+            let s = e[0] * (cur[i][1] - p0[1]) - e[1] * (cur[i][0] - p0[0]);
+            side[i] = s;
+            all_in &= s >= 0.0;
+            any_in |= s >= 0.0;
+        }
+        if all_in {
+            continue;
+        }
+        if !any_in {
+            return 0.0;
+        }
+        let mut m = 0usize;
+        for i in 0..n {
+            let j = if i + 1 == n { 0 } else { i + 1 };
+            let (su, sv) = (side[i], side[j]);
             if su >= 0.0 {
-                next.0[next.1] = u;
-                next.1 += 1;
+                next[m] = cur[i];
+                m += 1;
             }
-            if (su >= 0.0) != (sv >= 0.0) {
+            if (su >= 0.0) != (sv >= 0.0) && m < 9 {
                 let t = su / (su - sv);
-                next.0[next.1] = [u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1])];
-                next.1 += 1;
+                let (u, v) = (cur[i], cur[j]);
+                next[m] = [u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1])];
+                m += 1;
             }
-            if next.1 >= 8 {
+            if m >= 9 {
                 break;
             }
         }
         std::mem::swap(&mut cur, &mut next);
-        if cur.1 < 3 {
+        n = m;
+        if n < 3 {
             return 0.0;
         }
     }
-    poly_area(&cur).max(0.0)
+    let mut s = 0.0;
+    for i in 0..n {
+        let (p, q) = (cur[i], cur[if i + 1 == n { 0 } else { i + 1 }]);
+        s += p[0] * q[1] - p[1] * q[0];
+    }
+    (0.5 * s).max(0.0)
 }
 
 fn tri_points(m: &PoreMesh, c: usize) -> [[f64; 2]; 3] {
@@ -165,9 +175,11 @@ impl RemapOperator {
             let iy = |y: f64| (((y - lo[1]) / hy).floor().max(0.0) as usize).min(ny - 1);
             (ix(a[0]), ix(b[0]), iy(a[1]), iy(b[1]), a, b)
         };
+        // Packed corner coordinates of the new cells (one contiguous record per cell).
+        let new_tri: Vec<[[f64; 2]; 3]> = (0..nn).map(|c| tri_points(new, c)).collect();
         let mut start = vec![0u32; nx * ny + 1];
-        for c in 0..nn {
-            let (x0, x1, y0, y1, ..) = bin_range(&tri_points(new, c));
+        for t in &new_tri {
+            let (x0, x1, y0, y1, ..) = bin_range(t);
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     start[y * nx + x + 1] += 1;
@@ -179,8 +191,8 @@ impl RemapOperator {
         }
         let mut items = vec![0u32; start[nx * ny] as usize];
         let mut fill = start.clone();
-        for c in 0..nn {
-            let (x0, x1, y0, y1, ..) = bin_range(&tri_points(new, c));
+        for (c, t) in new_tri.iter().enumerate() {
+            let (x0, x1, y0, y1, ..) = bin_range(t);
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     let b = y * nx + x;
@@ -189,11 +201,13 @@ impl RemapOperator {
                 }
             }
         }
-        let mut new_bbox = Vec::with_capacity(nn);
-        for c in 0..nn {
-            let (.., a, b) = bin_range(&tri_points(new, c));
-            new_bbox.push((a, b));
-        }
+        let new_bbox: Vec<([f64; 2], [f64; 2])> = new_tri
+            .iter()
+            .map(|t| {
+                let (.., a, b) = bin_range(t);
+                (a, b)
+            })
+            .collect();
         let mut new_adjacency = vec![[NONE; 3]; nn];
         for (c, faces) in new.cell_faces.iter().enumerate() {
             for k in 0..3 {
@@ -230,18 +244,26 @@ impl RemapOperator {
                 let seed = items[start[bin] as usize..start[bin + 1] as usize]
                     .iter()
                     .copied()
-                    .find(|&c| contains(&tri_points(new, c as usize), g));
+                    .find(|&c| contains(&new_tri[c as usize], g));
                 match seed {
                     Some(s) => {
                         let (.., a, b) = bin_range(&p);
                         stamp[s as usize] = tag;
                         stack.push(s);
                         while let Some(c) = stack.pop() {
-                            let (ca, cb) = new_bbox[c as usize];
-                            if ca[0] >= b[0] || cb[0] <= a[0] || ca[1] >= b[1] || cb[1] <= a[1] {
+                            let t = &new_tri[c as usize];
+                            let (tx0, tx1) = (
+                                t[0][0].min(t[1][0]).min(t[2][0]),
+                                t[0][0].max(t[1][0]).max(t[2][0]),
+                            );
+                            let (ty0, ty1) = (
+                                t[0][1].min(t[1][1]).min(t[2][1]),
+                                t[0][1].max(t[1][1]).max(t[2][1]),
+                            );
+                            if tx0 >= b[0] || tx1 <= a[0] || ty0 >= b[1] || ty1 <= a[1] {
                                 continue;
                             }
-                            let ov = triangle_overlap_area(&p, &tri_points(new, c as usize));
+                            let ov = triangle_overlap_area(&p, &new_tri[c as usize]);
                             if ov > 0.0 {
                                 target.push(c);
                                 area.push(ov);
@@ -269,8 +291,7 @@ impl RemapOperator {
                                     {
                                         continue;
                                     }
-                                    let ov =
-                                        triangle_overlap_area(&p, &tri_points(new, c as usize));
+                                    let ov = triangle_overlap_area(&p, &new_tri[c as usize]);
                                     if ov > 0.0 {
                                         target.push(c);
                                         area.push(ov);

@@ -131,3 +131,29 @@ fn export_arrays_and_face_sets() {
     let perimeter: f64 = m.fluid_solid_faces().map(|f| m.face_length[f]).sum();
     assert!(perimeter > 0.0 && perimeter < std::f64::consts::TAU * 0.3);
 }
+
+/// A-Eq. 8: the S2S aperture falls from β h_0 at zero stress towards β h_inf, e-fold per
+/// 1/(1.5e-7) Pa; tension is clamped to zero stress.
+#[test]
+fn s2s_aperture_law() {
+    let law = S2sApertureParams::default();
+    let (b, hi, h0) = (1.2, 5.75e-7, 3.25e-6);
+    assert!((law.aperture(0.0) - b * h0).abs() < 1e-20);
+    assert!((law.aperture(-5e6) - b * h0).abs() < 1e-20);
+    let s = 1.0 / 1.5e-7;
+    let expect = b * (hi + (h0 - hi) * (-1.0f64).exp());
+    assert!((law.aperture(s) - expect).abs() < 1e-18);
+    assert!((law.aperture(1e12) - b * hi).abs() < 1e-18);
+    // Updating a meshed pair's stress changes its channel's aperture.
+    let cs = [circle(0.4, 0.5, 0.2, 7), circle(0.65, 0.5, 0.1, 9)];
+    let ct = [Contact {
+        circles: [0, 1],
+        normal_stress: 0.0,
+    }];
+    let mut pm = mesh_packing(&cs, &ct, &box_params([0.0, 0.0], [1.0, 1.0], 32)).unwrap();
+    let ch = pm.contact_channel[0] as usize;
+    assert_eq!(pm.mesh.channels.aperture[ch], law.aperture(0.0));
+    pm.update_s2s_apertures(&[s], &law).unwrap();
+    assert_eq!(pm.mesh.channels.aperture[ch], law.aperture(s));
+    assert!(pm.update_s2s_apertures(&[], &law).is_err());
+}

@@ -111,6 +111,34 @@ fn volume_rate_matches_finite_difference() {
     assert!(errs[0] / errs[1] > 3.5, "{errs:?}");
 }
 
+/// After a move, the T2T apertures are those of A-Eq. 9 on the moved triangles (the same as
+/// rebuilding the channels), and the channel order is unchanged.
+#[test]
+fn t2t_apertures_follow_the_motion() {
+    let (cs, mut pm) = bar();
+    let r = rates(cs.len());
+    let kinds = pm.mesh.channels.kind.clone();
+    let mut mm = MeshMotion::new();
+    mm.update(&mut pm, &State::at(&cs, &r, 2.0).motion())
+        .unwrap();
+    assert_eq!(pm.mesh.channels.kind, kinds);
+    let mut rebuilt = pm.mesh.clone();
+    rebuilt.build_t2t_channels(pm.t2t_reduction_factor);
+    let by_face: std::collections::HashMap<u32, f64> = (0..rebuilt.channels.len())
+        .filter(|&c| rebuilt.channels.kind[c] == ChannelKind::T2T)
+        .map(|c| (rebuilt.channels.face[c], rebuilt.channels.aperture[c]))
+        .collect();
+    let mut changed = 0;
+    for c in 0..pm.mesh.channels.len() {
+        if pm.mesh.channels.kind[c] == ChannelKind::T2T {
+            let h = by_face[&pm.mesh.channels.face[c]];
+            assert_eq!(pm.mesh.channels.aperture[c], h);
+            changed += 1;
+        }
+    }
+    assert!(changed > 0);
+}
+
 /// The box does not move: the cell volume rates sum to zero to round-off, and the total
 /// volume stays the box volume.
 #[test]
