@@ -103,6 +103,10 @@ pub struct HeatStepper {
     // Cell → channels (CSR): channel index and whether the cell is the channel's second cell.
     cell_channel_start: Vec<u32>,
     cell_channel: Vec<(u32, bool)>,
+    // The cell at the other end of each entry of `cell_channel`.
+    cell_channel_partner: Vec<u32>,
+    // Scratch of the CSR fill.
+    cell_channel_next: Vec<u32>,
 }
 
 impl HeatStepper {
@@ -334,11 +338,18 @@ impl HeatStepper {
         self.cell_channel
             .resize(self.cell_channel_start[n] as usize, (NONE, false));
         // Fill in channel order: each cell's list is sorted by channel index.
-        let mut next: Vec<u32> = self.cell_channel_start[..n].to_vec();
+        self.cell_channel_partner.clear();
+        self.cell_channel_partner
+            .resize(self.cell_channel_start[n] as usize, NONE);
+        self.cell_channel_next.clear();
+        self.cell_channel_next
+            .extend_from_slice(&self.cell_channel_start[..n]);
+        let next = &mut self.cell_channel_next;
         for (k, cells) in ch.cells.iter().enumerate() {
             for (side, &c) in cells.iter().enumerate() {
                 let slot = &mut next[c as usize];
                 self.cell_channel[*slot as usize] = (k as u32, side == 1);
+                self.cell_channel_partner[*slot as usize] = cells[1 - side];
                 *slot += 1;
             }
         }
@@ -717,10 +728,9 @@ impl HeatStepper {
         let tf = &self.face_temperature;
         let grad = &self.gradient;
         let start = &self.cell_channel_start;
-        let cell_channel = &self.cell_channel;
+        let partner = &self.cell_channel_partner;
         let source = &self.stencil_source;
         let offset = &self.stencil_offset;
-        let ch = &mesh.channels;
         self.limiter
             .par_iter_mut()
             .with_min_len(GRAIN)
@@ -737,9 +747,8 @@ impl HeatStepper {
                     lo = lo.min(v);
                     hi = hi.max(v);
                 }
-                for &(k, second) in &cell_channel[start[c] as usize..start[c + 1] as usize] {
-                    let [a, b] = ch.cells[k as usize];
-                    let v = temp[if second { a } else { b } as usize];
+                for &other in &partner[start[c] as usize..start[c + 1] as usize] {
+                    let v = temp[other as usize];
                     lo = lo.min(v);
                     hi = hi.max(v);
                 }
