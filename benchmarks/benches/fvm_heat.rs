@@ -128,6 +128,24 @@ fn bench(c: &mut Criterion) {
     group.bench_function("prepare", |b| {
         b.iter(|| pool.install(|| stepper.prepare(&model, &mesh, &input, &s).unwrap()))
     });
+    group.bench_function("prepare_validate_input", |b| {
+        b.iter(|| input.validate(&mesh).unwrap())
+    });
+    group.bench_function("prepare_cells", |b| {
+        b.iter(|| pool.install(|| stepper.prepare_cells(&model, &mesh, &input)))
+    });
+    group.bench_function("prepare_spheres", |b| {
+        b.iter(|| stepper.prepare_spheres(&mesh))
+    });
+    group.bench_function("prepare_channels", |b| {
+        b.iter(|| stepper.prepare_channels(&mesh))
+    });
+    group.bench_function("prepare_faces", |b| {
+        b.iter(|| pool.install(|| stepper.prepare_faces(&model, &mesh).unwrap()))
+    });
+    group.bench_function("prepare_stencils", |b| {
+        b.iter(|| pool.install(|| stepper.prepare_stencils(&model, &mesh)))
+    });
     group.bench_function("face_temperatures", |b| {
         b.iter(|| pool.install(|| stepper.face_temperatures(&model, &mesh, &s.temperature, 0.0)))
     });

@@ -245,7 +245,8 @@ impl HeatStepper {
         Ok(())
     }
 
-    fn prepare_cells(&mut self, model: &HeatModel, mesh: &PoreMesh, input: &FlowInput) {
+    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
+    pub fn prepare_cells(&mut self, model: &HeatModel, mesh: &PoreMesh, input: &FlowInput) {
         let n = mesh.n_cells();
         self.capacity.resize(n, 0.0);
         self.conductivity.resize(n, 0.0);
@@ -297,7 +298,8 @@ impl HeatStepper {
         }
     }
 
-    fn prepare_spheres(&mut self, mesh: &PoreMesh) {
+    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
+    pub fn prepare_spheres(&mut self, mesh: &PoreMesh) {
         let mut n_spheres = 0usize;
         let (mut fluid, mut total) = (0.0, 0.0);
         for (c, k) in mesh.cell_kind.iter().enumerate() {
@@ -321,7 +323,8 @@ impl HeatStepper {
         }
     }
 
-    fn prepare_channels(&mut self, mesh: &PoreMesh) {
+    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
+    pub fn prepare_channels(&mut self, mesh: &PoreMesh) {
         let n = mesh.n_cells();
         let ch = &mesh.channels;
         self.cell_channel_start.clear();
@@ -385,7 +388,8 @@ impl HeatStepper {
         }
     }
 
-    fn prepare_faces(&mut self, model: &HeatModel, mesh: &PoreMesh) -> Result<(), HeatError> {
+    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
+    pub fn prepare_faces(&mut self, model: &HeatModel, mesh: &PoreMesh) -> Result<(), HeatError> {
         let nf = mesh.n_faces();
         // Degenerate links first (deterministic: the lowest face index).
         if let Some(f) = (0..nf).into_par_iter().position_first(|f| {
@@ -488,7 +492,8 @@ impl HeatStepper {
         Ok(())
     }
 
-    fn prepare_stencils(&mut self, model: &HeatModel, mesh: &PoreMesh) {
+    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
+    pub fn prepare_stencils(&mut self, model: &HeatModel, mesh: &PoreMesh) {
         let n = mesh.n_cells();
         self.stencil_source.resize(n, [0; 3]);
         self.stencil_weight.resize(n, [[0.0; 2]; 3]);
