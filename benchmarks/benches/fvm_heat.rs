@@ -112,6 +112,60 @@ fn bench(c: &mut Criterion) {
     }
     group.finish();
 
+    // Stage by stage, one thread.
+    let mut group = c.benchmark_group("fvm_heat_200k_cells_stages_1_thread");
+    group.sample_size(20);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let mut stepper = HeatStepper::new();
+    let mut s = state.clone();
+    stepper.prepare(&model, &mesh, &input, &s).unwrap();
+    stepper.face_temperatures(&model, &mesh, &s.temperature, 0.0);
+    stepper.gradients(&model, &mesh, &s.temperature);
+    stepper.limiters(&mesh, &s.temperature);
+    group.bench_function("prepare", |b| {
+        b.iter(|| pool.install(|| stepper.prepare(&model, &mesh, &input, &s).unwrap()))
+    });
+    group.bench_function("prepare_validate_input", |b| {
+        b.iter(|| input.validate(&mesh).unwrap())
+    });
+    group.bench_function("prepare_cells", |b| {
+        b.iter(|| pool.install(|| stepper.prepare_cells(&model, &mesh, &input)))
+    });
+    group.bench_function("prepare_spheres", |b| {
+        b.iter(|| stepper.prepare_spheres(&mesh))
+    });
+    group.bench_function("prepare_channels", |b| {
+        b.iter(|| stepper.prepare_channels(&mesh))
+    });
+    group.bench_function("prepare_faces", |b| {
+        b.iter(|| pool.install(|| stepper.prepare_faces(&model, &mesh).unwrap()))
+    });
+    group.bench_function("prepare_stencils", |b| {
+        b.iter(|| pool.install(|| stepper.prepare_stencils(&model, &mesh)))
+    });
+    group.bench_function("face_temperatures", |b| {
+        b.iter(|| pool.install(|| stepper.face_temperatures(&model, &mesh, &s.temperature, 0.0)))
+    });
+    group.bench_function("gradients", |b| {
+        b.iter(|| pool.install(|| stepper.gradients(&model, &mesh, &s.temperature)))
+    });
+    group.bench_function("limiters", |b| {
+        b.iter(|| pool.install(|| stepper.limiters(&mesh, &s.temperature)))
+    });
+    group.bench_function("face_heat", |b| {
+        b.iter(|| pool.install(|| stepper.face_heat(&model, &mesh, &input, &s.temperature, 0.0)))
+    });
+    group.bench_function("channel_heat", |b| {
+        b.iter(|| pool.install(|| stepper.channel_heat(&model, &mesh, &input, &s.temperature)))
+    });
+    group.bench_function("advance", |b| {
+        b.iter(|| pool.install(|| stepper.advance(&mesh, &mut s.temperature, 1e-9)))
+    });
+    group.finish();
+
     let rest = FlowInput {
         channel_mass_flux: vec![0.0; input.channel_mass_flux.len()],
         ..input.clone()

@@ -45,12 +45,17 @@ pub const REYNOLDS_SWITCH: f64 = 100.0;
 /// Nusselt number of the fluid–particle exchange: A-Eq. 43 for Re ≤ 100, A-Eq. 44 above.
 pub fn nusselt(porosity: f64, reynolds: f64, prandtl: f64) -> f64 {
     let (e, re) = (porosity, reynolds.max(0.0));
+    let a = 7.0 - 10.0 * e + 5.0 * e * e;
+    if re == 0.0 {
+        return a;
+    }
     let pr3 = prandtl.max(0.0).cbrt();
+    let ln_re = re.ln();
     if re <= REYNOLDS_SWITCH {
-        (7.0 - 10.0 * e + 5.0 * e * e) * (1.0 + 0.1 * re.powf(0.2) * pr3)
-            + (1.33 - 2.19 * e + 1.15 * e * e) * re.powf(0.7) * pr3
+        a * (1.0 + 0.1 * (0.2 * ln_re).exp() * pr3)
+            + (1.33 - 2.19 * e + 1.15 * e * e) * (0.7 * ln_re).exp() * pr3
     } else {
-        2.0 + 1.1 * re.powf(0.6) * pr3
+        2.0 + 1.1 * (0.6 * ln_re).exp() * pr3
     }
 }
 

@@ -82,6 +82,13 @@ pub struct HeatStepper {
     speed: Vec<f64>,
     pub(crate) gradient: Vec<[f64; 2]>,
     limiter: Vec<f64>,
+    // Per cell, per face k: where the neighbour value comes from (a cell index, or
+    // `FACE_VALUE | face` for a face temperature), its least-squares gradient weight, and
+    // the offset face centroid − cell centroid; plus the gradient's constant (Neumann) part.
+    stencil_source: Vec<[u32; 3]>,
+    stencil_weight: Vec<[[f64; 2]; 3]>,
+    stencil_offset: Vec<[[f64; 2]; 3]>,
+    gradient_constant: Vec<[f64; 2]>,
     // Per sphere.
     sphere_radius: Vec<f64>,
     porosity: f64,
@@ -96,6 +103,10 @@ pub struct HeatStepper {
     // Cell → channels (CSR): channel index and whether the cell is the channel's second cell.
     cell_channel_start: Vec<u32>,
     cell_channel: Vec<(u32, bool)>,
+    // The cell at the other end of each entry of `cell_channel`.
+    cell_channel_partner: Vec<u32>,
+    // Scratch of the CSR fill.
+    cell_channel_next: Vec<u32>,
 }
 
 impl HeatStepper {
@@ -224,6 +235,7 @@ impl HeatStepper {
         self.prepare_spheres(mesh);
         self.prepare_channels(mesh);
         self.prepare_faces(model, mesh)?;
+        self.prepare_stencils(model, mesh);
         let nf = mesh.n_faces();
         self.gradient.resize(n, [0.0; 2]);
         self.limiter.resize(n, 1.0);
@@ -233,7 +245,8 @@ impl HeatStepper {
         Ok(())
     }
 
-    fn prepare_cells(&mut self, model: &HeatModel, mesh: &PoreMesh, input: &FlowInput) {
+    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
+    pub fn prepare_cells(&mut self, model: &HeatModel, mesh: &PoreMesh, input: &FlowInput) {
         let n = mesh.n_cells();
         self.capacity.resize(n, 0.0);
         self.conductivity.resize(n, 0.0);
@@ -285,7 +298,8 @@ impl HeatStepper {
         }
     }
 
-    fn prepare_spheres(&mut self, mesh: &PoreMesh) {
+    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
+    pub fn prepare_spheres(&mut self, mesh: &PoreMesh) {
         let mut n_spheres = 0usize;
         let (mut fluid, mut total) = (0.0, 0.0);
         for (c, k) in mesh.cell_kind.iter().enumerate() {
@@ -309,7 +323,8 @@ impl HeatStepper {
         }
     }
 
-    fn prepare_channels(&mut self, mesh: &PoreMesh) {
+    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
+    pub fn prepare_channels(&mut self, mesh: &PoreMesh) {
         let n = mesh.n_cells();
         let ch = &mesh.channels;
         self.cell_channel_start.clear();
@@ -326,11 +341,18 @@ impl HeatStepper {
         self.cell_channel
             .resize(self.cell_channel_start[n] as usize, (NONE, false));
         // Fill in channel order: each cell's list is sorted by channel index.
-        let mut next: Vec<u32> = self.cell_channel_start[..n].to_vec();
+        self.cell_channel_partner.clear();
+        self.cell_channel_partner
+            .resize(self.cell_channel_start[n] as usize, NONE);
+        self.cell_channel_next.clear();
+        self.cell_channel_next
+            .extend_from_slice(&self.cell_channel_start[..n]);
+        let next = &mut self.cell_channel_next;
         for (k, cells) in ch.cells.iter().enumerate() {
             for (side, &c) in cells.iter().enumerate() {
                 let slot = &mut next[c as usize];
                 self.cell_channel[*slot as usize] = (k as u32, side == 1);
+                self.cell_channel_partner[*slot as usize] = cells[1 - side];
                 *slot += 1;
             }
         }
@@ -366,7 +388,8 @@ impl HeatStepper {
         }
     }
 
-    fn prepare_faces(&mut self, model: &HeatModel, mesh: &PoreMesh) -> Result<(), HeatError> {
+    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
+    pub fn prepare_faces(&mut self, model: &HeatModel, mesh: &PoreMesh) -> Result<(), HeatError> {
         let nf = mesh.n_faces();
         // Degenerate links first (deterministic: the lowest face index).
         if let Some(f) = (0..nf).into_par_iter().position_first(|f| {
@@ -467,6 +490,106 @@ impl HeatStepper {
                 }
             });
         Ok(())
+    }
+
+    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
+    pub fn prepare_stencils(&mut self, model: &HeatModel, mesh: &PoreMesh) {
+        let n = mesh.n_cells();
+        self.stencil_source.resize(n, [0; 3]);
+        self.stencil_weight.resize(n, [[0.0; 2]; 3]);
+        self.stencil_offset.resize(n, [[0.0; 2]; 3]);
+        self.gradient_constant.resize(n, [0.0; 2]);
+        let laws = &self.face_law;
+        (
+            &mut self.stencil_source,
+            &mut self.stencil_weight,
+            &mut self.stencil_offset,
+            &mut self.gradient_constant,
+        )
+            .into_par_iter()
+            .with_min_len(GRAIN)
+            .enumerate()
+            .for_each(|(c, (source, weight, offset, constant))| {
+                *constant = [0.0; 2];
+                let xc = mesh.cell_centroid[c];
+                // Rows e_k · ∇T = ΔT_k / |d_k| (unit e_k), Neumann rows n · ∇T = q / λ.
+                let mut dir = [[0.0; 2]; 3];
+                let mut inv_len = [0.0; 3];
+                let mut neumann = [0.0; 2];
+                let (mut m00, mut m01, mut m11) = (0.0, 0.0, 0.0);
+                for (k, &f) in mesh.cell_faces[c].iter().enumerate() {
+                    let f = f as usize;
+                    let [c0, c1] = mesh.face_cells[f];
+                    offset[k] = sub(mesh.face_centroid[f], xc);
+                    let (d, e_override) = match laws[f] {
+                        FaceLaw::Diffusive { .. } => {
+                            let other = if c0 == c as u32 { c1 } else { c0 };
+                            source[k] = other;
+                            (sub(mesh.cell_centroid[other as usize], xc), None)
+                        }
+                        FaceLaw::Interface { .. } => {
+                            source[k] = FACE_VALUE | f as u32;
+                            (offset[k], None)
+                        }
+                        FaceLaw::Boundary {
+                            side, conductivity, ..
+                        } => {
+                            source[k] = FACE_VALUE | f as u32;
+                            match &model.sides[side as usize] {
+                                SideCondition::HeatFlux(q) => (
+                                    offset[k],
+                                    Some((conductivity > 0.0).then(|| q / conductivity)),
+                                ),
+                                _ => (offset[k], None),
+                            }
+                        }
+                    };
+                    let e = match e_override {
+                        // Neumann row (or none when λ = 0): no weight on the face value.
+                        Some(gradient) => {
+                            let n = mesh.face_normal[f];
+                            if let Some(g) = gradient {
+                                neumann[0] += n[0] * g;
+                                neumann[1] += n[1] * g;
+                                m00 += n[0] * n[0];
+                                m01 += n[0] * n[1];
+                                m11 += n[1] * n[1];
+                            }
+                            continue;
+                        }
+                        None => {
+                            let len = dot(d, d).sqrt();
+                            if len > 0.0 {
+                                inv_len[k] = 1.0 / len;
+                                [d[0] / len, d[1] / len]
+                            } else {
+                                [0.0; 2]
+                            }
+                        }
+                    };
+                    dir[k] = e;
+                    m00 += e[0] * e[0];
+                    m01 += e[0] * e[1];
+                    m11 += e[1] * e[1];
+                }
+                let det = m00 * m11 - m01 * m01;
+                if det.abs() <= 1e-12 * (m00 + m11).powi(2) {
+                    *weight = [[0.0; 2]; 3];
+                    return;
+                }
+                let inv = [[m11 / det, -m01 / det], [-m01 / det, m00 / det]];
+                let apply = |v: [f64; 2]| {
+                    [
+                        inv[0][0] * v[0] + inv[0][1] * v[1],
+                        inv[1][0] * v[0] + inv[1][1] * v[1],
+                    ]
+                };
+                for k in 0..3 {
+                    let w = apply(dir[k]);
+                    weight[k] = [w[0] * inv_len[k], w[1] * inv_len[k]];
+                }
+                *constant = apply(neumann);
+            });
     }
 
     /// Per-cell sum of conductances and twice the advective outflow, and the resulting limit.
@@ -571,11 +694,16 @@ impl HeatStepper {
             });
     }
 
-    /// Stage 2: cell gradients from the cell and face temperatures: weighted least squares
-    /// (default) or Green–Gauss (A-Eq. 41) with the face values of stage 1.
+    /// Stage 2: cell gradients from the cell and face temperatures: least squares (default;
+    /// rows e_k · ∇T = ΔT_k / |d_k| with unit directions to the neighbour centroid in the same
+    /// medium or to the face centroid for interface and boundary face values, and Neumann
+    /// rows n · ∇T = q / λ on prescribed-flux faces; weights precomputed in `prepare`) or
+    /// Green–Gauss (A-Eq. 41) with the face values of stage 1.
     pub fn gradients(&mut self, model: &HeatModel, mesh: &PoreMesh, temp: &[f64]) {
         let tf = &self.face_temperature;
-        let laws = &self.face_law;
+        let source = &self.stencil_source;
+        let weight = &self.stencil_weight;
+        let constant = &self.gradient_constant;
         let scheme = model.gradient;
         self.gradient
             .par_iter_mut()
@@ -584,7 +712,16 @@ impl HeatStepper {
             .for_each(|(c, g)| {
                 *g = match scheme {
                     GradientScheme::GreenGauss => green_gauss(mesh, tf, c),
-                    GradientScheme::LeastSquares => least_squares(model, mesh, laws, tf, temp, c),
+                    GradientScheme::LeastSquares => {
+                        let tc = temp[c];
+                        let mut s = constant[c];
+                        for k in 0..3 {
+                            let dt = stencil_value(source[c][k], temp, tf) - tc;
+                            s[0] += weight[c][k][0] * dt;
+                            s[1] += weight[c][k][1] * dt;
+                        }
+                        s
+                    }
                 };
             });
     }
@@ -596,8 +733,9 @@ impl HeatStepper {
         let tf = &self.face_temperature;
         let grad = &self.gradient;
         let start = &self.cell_channel_start;
-        let cell_channel = &self.cell_channel;
-        let ch = &mesh.channels;
+        let partner = &self.cell_channel_partner;
+        let source = &self.stencil_source;
+        let offset = &self.stencil_offset;
         self.limiter
             .par_iter_mut()
             .with_min_len(GRAIN)
@@ -609,44 +747,27 @@ impl HeatStepper {
                 }
                 let tc = temp[c];
                 let (mut lo, mut hi) = (tc, tc);
-                for &f in &mesh.cell_faces[c] {
-                    let f = f as usize;
-                    let [c0, c1] = mesh.face_cells[f];
-                    let other = if c0 == c as u32 { c1 } else { c0 };
-                    let v = if other != NONE && mesh.cell_kind[other as usize].is_fluid() {
-                        temp[other as usize]
-                    } else {
-                        tf[f]
-                    };
+                for &src in &source[c] {
+                    let v = stencil_value(src, temp, tf);
                     lo = lo.min(v);
                     hi = hi.max(v);
                 }
-                let list = &cell_channel[start[c] as usize..start[c + 1] as usize];
-                for &(k, second) in list {
-                    let [a, b] = ch.cells[k as usize];
-                    let other = if second { a } else { b };
+                for &other in &partner[start[c] as usize..start[c + 1] as usize] {
                     let v = temp[other as usize];
                     lo = lo.min(v);
                     hi = hi.max(v);
                 }
                 let g = grad[c];
-                let xc = mesh.cell_centroid[c];
                 let mut p = 1.0f64;
-                let mut limit = |x: [f64; 2]| {
-                    let d = dot(g, sub(x, xc));
-                    let r = if d > 0.0 {
-                        (hi - tc) / d
+                for r in &offset[c] {
+                    let d = dot(g, *r);
+                    if d > 0.0 {
+                        p = p.min((hi - tc) / d);
                     } else if d < 0.0 {
-                        (lo - tc) / d
-                    } else {
-                        1.0
-                    };
-                    p = p.min(r.min(1.0));
-                };
-                for &f in &mesh.cell_faces[c] {
-                    limit(mesh.face_centroid[f as usize]);
+                        p = p.min((lo - tc) / d);
+                    }
                 }
-                *psi = p.max(0.0);
+                *psi = p.clamp(0.0, 1.0);
             });
     }
 
@@ -836,58 +957,16 @@ fn green_gauss(mesh: &PoreMesh, tf: &[f64], c: usize) -> [f64; 2] {
     [s[0] * inv, s[1] * inv]
 }
 
-/// Least-squares gradient: rows e · ∇T = ΔT / |d| with unit directions e = d / |d| to the
-/// neighbour centroid (same medium) or to the face centroid (interface and boundary face
-/// values), and e = n, rhs = q / λ for prescribed-flux faces (Neumann rows).
-fn least_squares(
-    model: &HeatModel,
-    mesh: &PoreMesh,
-    laws: &[FaceLaw],
-    tf: &[f64],
-    temp: &[f64],
-    c: usize,
-) -> [f64; 2] {
-    let xc = mesh.cell_centroid[c];
-    let tc = temp[c];
-    let (mut m00, mut m01, mut m11, mut r0, mut r1) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    let mut row = |e: [f64; 2], rhs: f64| {
-        m00 += e[0] * e[0];
-        m01 += e[0] * e[1];
-        m11 += e[1] * e[1];
-        r0 += e[0] * rhs;
-        r1 += e[1] * rhs;
-    };
-    for &f in &mesh.cell_faces[c] {
-        let f = f as usize;
-        let [c0, c1] = mesh.face_cells[f];
-        let (d, dt) = match laws[f] {
-            FaceLaw::Diffusive { .. } => {
-                let other = if c0 == c as u32 { c1 } else { c0 } as usize;
-                (sub(mesh.cell_centroid[other], xc), temp[other] - tc)
-            }
-            FaceLaw::Interface { .. } => (sub(mesh.face_centroid[f], xc), tf[f] - tc),
-            FaceLaw::Boundary {
-                side, conductivity, ..
-            } => match &model.sides[side as usize] {
-                SideCondition::HeatFlux(q) => {
-                    if conductivity > 0.0 {
-                        row(mesh.face_normal[f], q / conductivity);
-                    }
-                    continue;
-                }
-                _ => (sub(mesh.face_centroid[f], xc), tf[f] - tc),
-            },
-        };
-        let len = dot(d, d).sqrt();
-        if len > 0.0 {
-            row([d[0] / len, d[1] / len], dt / len);
-        }
+/// Marks a stencil source as a face temperature (the low bits are the face index).
+const FACE_VALUE: u32 = 1 << 31;
+
+#[inline]
+fn stencil_value(source: u32, temp: &[f64], face_temperature: &[f64]) -> f64 {
+    if source & FACE_VALUE != 0 {
+        face_temperature[(source & !FACE_VALUE) as usize]
+    } else {
+        temp[source as usize]
     }
-    let det = m00 * m11 - m01 * m01;
-    if det.abs() <= 1e-12 * (m00 + m11).powi(2) {
-        return [0.0; 2];
-    }
-    [(m11 * r0 - m01 * r1) / det, (m00 * r1 - m01 * r0) / det]
 }
 
 fn face_cosine(mesh: &PoreMesh, f: usize, c0: usize, c1: usize) -> f64 {
