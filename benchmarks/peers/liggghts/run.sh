@@ -7,7 +7,7 @@
 #   benchmarks/peers/liggghts/run.sh [STEPS=2000] [ROUNDS=3]
 set -euo pipefail
 SUDO=$([ "$(id -u)" = 0 ] || echo sudo)
-STEPS=${1:-2000}; ROUNDS=${2:-3}; DT=2e-6
+STEPS=${1:-2000}; ROUNDS=${2:-3}; DT=5e-7
 here=$(cd "$(dirname "$0")" && pwd); root=$(cd "$here/../../.." && pwd)
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 
