@@ -4,7 +4,7 @@
 # particle-steps per second and the ratio of medians. Not run in CI. Installs Debian's
 # liggghts and openmpi-bin (needs root/sudo and network to Debian).
 #
-#   benchmarks/peers/liggghts/run.sh [STEPS=2000] [ROUNDS=3]
+#   SIZES="10000 100000" benchmarks/peers/liggghts/run.sh [STEPS=2000] [ROUNDS=3]
 set -euo pipefail
 SUDO=$([ "$(id -u)" = 0 ] || echo sudo)
 STEPS=${1:-2000}; ROUNDS=${2:-3}; DT=5e-7
@@ -16,7 +16,7 @@ command -v liggghts >/dev/null || { $SUDO apt-get update && $SUDO apt-get instal
 peer="$root/target/release/dem_peer"
 
 median() { sort -g | awk '{a[NR]=$1} END {print (NR%2 ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2)}'; }
-for n in 10000 100000; do
+for n in ${SIZES:-10000 100000}; do
   "$peer" write-bed "$work/bed$n.csv" "$n"
   python3 "$here/csv_to_data.py" "$work/bed$n.csv" 2500 "$work/bed$n.data"
   atoms=$(grep -c '^particle' "$work/bed$n.csv")
