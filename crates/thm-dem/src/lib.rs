@@ -81,7 +81,7 @@
 //! at every pair closer than a given gap; [`packing::Packing`] reads and writes plain CSV
 //! (`particle,x,y,z,radius` and `bond,a,b` rows). The A-Sect. 3 bar (20 × 80 mm, 4–8 mm, 10 %)
 //! holds about 49 spheres at 10 % porosity with uniform diameters (`0.9·1600 mm² / E[πd²/4]
-//! = 29.3 mm²`); the "40–45 spheres" of the specimen description correspond to 17–22 %.
+//! = 29.3 mm²`); the "40–45 spheres" of the specimen description correspond to 18–27 %.
 //! [`verification::cases`] holds the two-sphere restitution, the bond threshold and the
 //! uniaxial tension test of A-Sect. 3.1 (see its notes for the comparison with the paper).
 //!
