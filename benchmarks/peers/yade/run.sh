@@ -10,7 +10,7 @@ N=${1:-10000}; STEPS=${2:-2000}; ROUNDS=${3:-3}; DT=1e-7
 here=$(cd "$(dirname "$0")" && pwd); root=$(cd "$here/../../.." && pwd)
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 
-command -v yade >/dev/null || { $SUDO apt-get update && $SUDO apt-get install -y python3-yade; }
+command -v yade >/dev/null || { $SUDO apt-get update && $SUDO apt-get install -y yade python3-yade; }
 (cd "$root" && cargo build --release -p thm-benchmarks --bin dem_peer)
 peer="$root/target/release/dem_peer"
 

@@ -160,14 +160,14 @@ fn bed_state(p: &Packing) -> Result<DemState, String> {
     Ok(DemState::new(particles, vec![floor]))
 }
 
-/// A lattice of spheres (radius 0.4–0.45 mm, spacing 1 mm, square footprint, ~N/side² layers)
+/// A lattice of spheres (radius 0.46–0.52 mm, spacing 1 mm, square footprint, ~N/side² layers)
 /// dropped onto a floor and settled with damping, then written without bonds.
 fn write_bed(path: &Path, n: usize) -> Result<(), String> {
     let side = ((n as f64) / 10.0).sqrt().round().max(1.0) as usize;
     let layers = n.div_ceil(side * side);
     let lattice = lattice_packing(Kinematics::Spheres3d, [side, side, layers], BED_SPACING, 7)
         .map_err(|e| e.to_string())?;
-    let radii: Vec<f64> = lattice.radii.iter().map(|r| r * 0.8).collect();
+    let radii: Vec<f64> = lattice.radii.iter().map(|r| r * 0.92).collect();
     let packing = Packing {
         kinematics: Kinematics::Spheres3d,
         centres: lattice.centres,

@@ -73,6 +73,18 @@
 //! - **Disks** have mass per unit thickness `ρπR²` \[kg/m\] and forces are per unit thickness.
 //! - **Rolling and twisting moments** are not transmitted (A-Eqs. 1–7 have none).
 //!
+//! ## Packings and verification
+//!
+//! [`packing::random_packing`] makes seeded random polydisperse packings in a rectangle or box
+//! at a target porosity (`1 − Σ A_i/A` planar, `1 − Σ V_i/V` 3D; overlaps count twice), by
+//! growing particles in a frictionless DEM run between walls, and installs bonds stress-free
+//! at every pair closer than a given gap; [`packing::Packing`] reads and writes plain CSV
+//! (`particle,x,y,z,radius` and `bond,a,b` rows). The A-Sect. 3 bar (20 × 80 mm, 4–8 mm, 10 %)
+//! holds about 49 spheres at 10 % porosity with uniform diameters (`0.9·1600 mm² / E[πd²/4]
+//! = 29.3 mm²`); the "40–45 spheres" of the specimen description correspond to 18–27 %.
+//! [`verification::cases`] holds the two-sphere restitution, the bond threshold and the
+//! uniaxial tension test of A-Sect. 3.1 (see its notes for the comparison with the paper).
+//!
 //! ## Validity
 //!
 //! Small overlaps (`U/R` ≲ 0.1 at contacts that were never bonded), quasi-static or moderately

@@ -281,8 +281,21 @@ impl<L: ContactLaw> Stepper<L> {
         let particle_contact =
             |((h, r), pair): ((&mut ContactHistory, &mut ContactResponse), &[u32; 2])| {
                 let (a, b) = (pair[0] as usize, pair[1] as usize);
+                let branch = p.position[b] - p.position[a];
+                // Candidate pairs that do not touch (most of a Verlet list) cost one
+                // squared distance; their response is cleared only if it was not already.
+                if h.bond != BondState::Intact && h.shear_force == Vec3::ZERO {
+                    let reach = p.radius[a] + p.radius[b] - h.reference_penetration;
+                    if reach <= 0.0 || branch.norm_squared() >= reach * reach {
+                        h.normal = Vec3::ZERO;
+                        if r.active || r.broke.is_some() {
+                            *r = ContactResponse::default();
+                        }
+                        return;
+                    }
+                }
                 let kin = ContactKinematics::from_pair(
-                    p.position[b] - p.position[a],
+                    branch,
                     p.velocity[b] - p.velocity[a],
                     p.angular_velocity[a],
                     p.angular_velocity[b],
@@ -290,14 +303,6 @@ impl<L: ContactLaw> Stepper<L> {
                     p.radius[b],
                     dt,
                 );
-                if h.bond != BondState::Intact
-                    && kin.penetration <= h.reference_penetration
-                    && h.shear_force == Vec3::ZERO
-                {
-                    h.normal = kin.normal;
-                    *r = ContactResponse::default();
-                    return;
-                }
                 let input = PairInput {
                     radius_a: p.radius[a],
                     radius_b: p.radius[b],
