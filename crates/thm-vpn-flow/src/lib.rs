@@ -48,7 +48,7 @@
 //! ## What it does not do
 //!
 //! Heat (`thm-fvm-heat`), the mesh and its remap (`thm-vpn-mesh`), the Peng–Robinson EOS
-//! (`thm-eos`, plugged in through [`PoreFluid`]), the S2S apertures of A-Eq. 8 (set by the
+//! (`thm-eos`, plugged in through [`PoreFluid`] by [`EosFluid`]), the S2S apertures of A-Eq. 8 (set by the
 //! coupling through [`Network::set_channel_apertures`] or the mesh), gravity (neglected, as in
 //! A-Sect. 2.2.1), phase change and capillarity (not in the paper).
 //!
@@ -81,7 +81,9 @@
 //! in kg/s. Valid for laminar channel flow (check [`StepReport::max_reynolds`]) and for pores
 //! whose fluid the [`PoreFluid`] model describes. [`LinearLiquidIdealGas`] (a weakly
 //! compressible liquid `ρ_q = ρ₀(1 + (P − P₀)/K)` and an ideal gas, with an exact closure) is
-//! provided for tests, verification and until the Peng–Robinson closure is plugged in.
+//! provided for tests and verification; paper A's fluids are
+//! `EosFluid(thm_eos::water_air_closure(Model::PrCorrected))` (Peng–Robinson water with the
+//! volume correction and air, A-Eqs. 16–29, Table 1).
 //!
 //! ## Public seam and structure
 //!
@@ -97,7 +99,9 @@
 //!   stages of [`stepper`]: channel fluxes → boundary fluxes → gather per pore (with the
 //!   sub-step limit) → mass/volume update and closure.
 //! - [`FlowParameters`] (serde, `deny_unknown_fields`) → [`FlowConfig`] (validated).
-//! - [`PoreFluid`] — the thermodynamic seam (closure, phase density, bulk modulus).
+//! - [`PoreFluid`] — the thermodynamic seam (closure, phase density, bulk modulus);
+//!   [`EosFluid`] implements it for any `thm_eos::TwoPhaseClosure` (its errors become
+//!   [`ClosureFailure::Model`]).
 //! - [`FlowError`] — typed errors naming the pore, channel or link, the step and sub-step:
 //!   negative aperture, non-positive length or volume, closure failure, non-finite values,
 //!   too many sub-steps.
@@ -115,6 +119,7 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod channel;
+mod eos_fluid;
 mod error;
 pub mod fluid;
 mod forces;
@@ -124,6 +129,7 @@ mod state;
 pub mod stepper;
 pub mod verification;
 
+pub use eos_fluid::EosFluid;
 pub use error::{ClosureFailure, FlowError, Phase};
 pub use fluid::{LinearLiquidIdealGas, LinearLiquidIdealGasParameters, PoreFluid, PoreState};
 pub use forces::add_sphere_forces;
