@@ -78,7 +78,11 @@ fn assert_same_results(a: &Path, b: &Path, series: &str, frames: &[u64], n: u64)
         format!("{series}.pvd"),
         "scenario.toml".to_string(),
     ];
-    files.extend(frames.iter().map(|f| format!("{series}/{series}_{f:08}.vtu")));
+    files.extend(
+        frames
+            .iter()
+            .map(|f| format!("{series}/{series}_{f:08}.vtu")),
+    );
     for rel in files {
         assert!(read(&a.join(&rel)) == read(&b.join(&rel)), "{rel} differs");
     }
