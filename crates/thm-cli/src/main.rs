@@ -1,12 +1,10 @@
 //! The `thm` command-line tool.
 
-// The subcommands arrive with the crates that implement them; until then the enum is empty.
-#![allow(unreachable_code, unused_variables)]
-
-mod run;
-
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+
+mod eos;
+mod run;
 
 /// Coupled thermo-hydro-mechanical simulation of granular and porous materials.
 #[derive(Debug, Parser)]
@@ -18,6 +16,9 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Equation of state over CSV: reads standard input, writes standard output.
+    #[command(subcommand)]
+    Eos(eos::EosCommand),
     /// Run a scenario file: histories, ParaView series, checkpoints and a summary.
     Run(run::RunArgs),
 }
@@ -25,6 +26,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
+        Command::Eos(command) => eos::run(command),
         Command::Run(args) => run::run(&args),
     }
 }

@@ -1,16 +1,113 @@
 //! # thm-dem
 //!
-//! See `Cargo.toml` for the crate's role; the full module documentation (equations by paper
-//! and number, units, validity range, public seam) arrives with the crate's implementation.
+//! A deterministic, parallel discrete element method (DEM) for cohesive-frictional granular
+//! materials: spheres in 3D, spheres held in one plane (the single-layer specimens of
+//! Krzaczek, Nitka & Tejchman 2023, "paper A") and disks in 2D (the RVEs of Zhao, Zhao, Liang &
+//! Niu 2022, "paper B"). Every contact law has one implementation that serves all three.
+//!
+//! It does **not** do fluid flow, heat conduction, meshing or periodic cells: it takes the
+//! external forces (fluid pressure and shear, A-Eqs. 52–54) and particle temperatures from the
+//! caller and returns contact forces, broken bonds and friction work. A periodic cell (thm-rve)
+//! reuses [`ContactKinematics::from_pair`], [`ContactLaw`] and [`update_contact`] with its own
+//! branch vectors.
+//!
+//! ## Governing equations (SI units throughout)
+//!
+//! **Cohesive-frictional law** (paper A, A-Eqs. 1–7, [`CohesiveFrictional`]):
+//!
+//! - `F_n = K_n (U − U₀) N` (A-Eq. 1) with `U = R_A + R_B − |x_B − x_A|` and `U₀` the bond's
+//!   creation penetration (0 for a contact that was never bonded);
+//! - `F_s = F_s,prev − K_s ΔX_s` (A-Eq. 2), `F_s,prev` carried with the contact frame (below);
+//! - `K_n = E_c 2R_AR_B/(R_A+R_B)`, `K_s = ν_c K_n` (A-Eq. 3) \[N/m\];
+//! - intact bond: breaks in tension when `−F_n > F_n,min = T R²`, in shear when
+//!   `|F_s| > F_s,max + F_n tan μ_c`, `F_s,max = C R²` (A-Eqs. 4, 6);
+//! - no bond or broken bond: `F_n ≥ 0`, `|F_s| ≤ F_n tan μ_c` (A-Eq. 5);
+//! - Cundall's non-viscous damping on each component of the resultant force and torque,
+//!   `F_k ← F_k (1 − α_d sgn(F_k v_k))` (A-Eq. 7, [`stepper::cundall_damping`]).
+//!
+//! A-Table 1: `E_c` = 3.36 GPa, `ν_c` = 0.3, `C` = 150 MPa, `T` = 30 MPa, `μ_c` = 18°,
+//! `ρ` = 2600 kg/m³, `α_exp` = 8·10⁻⁶ 1/K ([`CohesiveFrictionalParams::paper_a_table_1`]).
+//!
+//! **Linear spring + Coulomb law** (paper B, B-Eqs. 35–36, [`LinearSpring`]): `f_n = k_n u_n`,
+//! `Δf_t = −k_t δu_t`, `|f_t| ≤ μ |f_n|`, with the **thermally sensitive bond** (B-Eqs.
+//! 38–40): breaks when `F_n > F_nb = β_b k_n R̄` (tension) or `|F_t| > F_tb = μ_b F_nb`,
+//! `R̄ = (R_A + R_B)/2`, `β_b = β_a (T_s − T)/T_s` for `T ≤ T_s`, else 0.
+//!
+//! **Friction work** (B-Eq. 32): per contact and step, `E_f = |F_s| (|F_s,trial| − |F_s|)/K_s`,
+//! i.e. `f_t v_t Δt` with `v_t` the *sliding* part of the tangential velocity
+//! ([`ContactResponse::friction_work`]); summed by [`ContactList::friction_work`].
+//!
+//! **Thermal expansion**: incremental A-Eq. 55 `r^{n+1} = r^n (1 + α_exp (T^{n+1} − T^n))`
+//! ([`ParticleState::expand_incremental`]) and from a reference radius B-Eq. 37
+//! `R = R⁽⁰⁾ (1 + β ΔT)` ([`ParticleState::expand_from_reference`]). Masses are kept
+//! (the solid conserves mass), inertias follow the radius.
+//!
+//! **Motion**: leapfrog (velocity Verlet in kick-drift form, as YADE's `NewtonIntegrator`):
+//! `v^{n+½} = v^{n−½} + Δt F^n/m`, `x^{n+1} = x^n + Δt v^{n+½}`, and the same for `ω` with
+//! the scalar moment of inertia (`2mR²/5` spheres, `mR²/2` disks; orientation is not tracked,
+//! the bodies are isotropic). Time-step estimate [`critical_time_step`]:
+//! `min_i √(m_i / Σ_c (K_n + K_s))` and `√(I_i / Σ_c K_s R_i²)`, a factor √2 inside the
+//! leapfrog limit by Gershgorin's bound.
+//!
+//! ## Choices where the papers are ambiguous
+//!
+//! - **Which R in `T·R²`, `C·R²`**: the smaller radius, as YADE's `CohFrictPhys`
+//!   ([`BondRadius::Smaller`], tested by `bond_breaks_when_tension_reaches_t_r_min_squared`);
+//!   `BondRadius::Mean` is available.
+//! - **Sign in A-Eq. 4**: the text has `‖F_n‖ tan μ_c`, which would make tension *raise* the
+//!   shear strength; we use the signed normal force (compression positive) and clip the
+//!   strength at 0, the "modified Mohr–Coulomb" envelope of A-Fig. 2d and YADE's code.
+//! - **A-Eq. 7** reads `F − α_d sgn(v) F`; Cundall's damping (and YADE) is `F − α_d |F| sgn(v)`,
+//!   i.e. opposing the motion; we use that, with YADE's mid-step velocity estimate.
+//! - **Stress-free bonds**: a bond is created with `U₀` = its current penetration, so bonds
+//!   across a gap or over an overlap carry no force at rest. After breakage the crack closes at
+//!   the same `U₀` (no force jump); the contact is dropped once the surfaces are further apart
+//!   than the Verlet skin, and a later contact starts with `U₀ = 0`.
+//! - **Contact normal stress** (input of A-Eq. 8): `σ_n = F_n / R²` with the same `R` as the
+//!   bond strength, so an intact bond breaks at `σ_n = −T` exactly.
+//! - **Walls** are rigid planes treated as a twin of the particle (`R_B = R_A`, as YADE), so
+//!   `K_n = E_c R`. Walls carry no bonds. Grips in tension are prescribed-velocity particles.
+//! - **B-Eq. 40** uses `T` measured from a stated reference temperature and `T_s` as the rise
+//!   above it at which the bond vanishes; the contact temperature is the mean of the two
+//!   particles'. The bond shear strength of B-Eq. 39 has no friction term added.
+//! - **Disks** have mass per unit thickness `ρπR²` \[kg/m\] and forces are per unit thickness.
+//! - **Rolling and twisting moments** are not transmitted (A-Eqs. 1–7 have none).
+//!
+//! ## Validity
+//!
+//! Small overlaps (`U/R` ≲ 0.1 at contacts that were never bonded), quasi-static or moderately
+//! dynamic loading, `Δt` below [`critical_time_step`]. Linear contact springs (no Hertz).
+//!
+//! ## Structure and guarantees
+//!
+//! State ([`DemState`]: particles as struct of arrays, contact lists with history, walls,
+//! events) is owned by the caller and round-trips through serde bit for bit; parameters are
+//! serde structs validated once ([`StepperParams`], [`CohesiveFrictionalParams`],
+//! [`LinearSpringParams`]); the [`Stepper`] holds only scratch buffers. A step is a fixed
+//! sequence of stages (neighbour update, contact forces, events, gather, integrate) each public
+//! and testable. Contacts are computed in parallel (rayon), each writing only its own entry;
+//! each particle then sums its own contacts in contact-index order, so 1 and 2 threads give
+//! identical bits. Neighbour search is an O(N) cell grid with a Verlet skin. Once the contact
+//! lists are warm a step does not allocate. Unstable runs stop with
+//! [`DemError::NonFinite`] naming the particle and the step.
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
-pub mod verification {
-    //! Verification cases of this crate, collected by `cargo xtask verify`.
-    use thm_verify::Case;
+pub mod contact;
+pub mod error;
+pub mod neighbour;
+pub mod packing;
+pub mod state;
+pub mod stepper;
+pub mod vec3;
+pub mod verification;
 
-    /// All verification cases of this crate.
-    pub fn cases() -> Vec<Case> {
-        Vec::new()
-    }
-}
+pub use contact::{
+    BondRadius, BondState, BreakMode, CohesiveFrictional, CohesiveFrictionalParams, ContactHistory,
+    ContactKinematics, ContactLaw, ContactProperties, ContactResponse, LinearSpring,
+    LinearSpringParams, PairInput, ThermalBondParams, update_contact,
+};
+pub use error::DemError;
+pub use state::{BondBreak, ContactList, DemState, Kinematics, ParticleState, Wall};
+pub use stepper::{Stepper, StepperConfig, StepperParams, critical_time_step};
+pub use vec3::Vec3;

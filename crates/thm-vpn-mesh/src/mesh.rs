@@ -276,29 +276,43 @@ impl PoreMesh {
             }
         }
 
-        // Faces from sorted edge keys; deterministic order (by first appearance).
+        // Faces in order of first appearance. Edges are found through a per-vertex list of
+        // the edges whose smaller end is that vertex (a few entries each).
         let nc = triangles.len();
-        let mut edge_map: std::collections::HashMap<(u32, u32), u32> =
-            std::collections::HashMap::with_capacity(nc * 2);
-        let mut face_vertices: Vec<[u32; 2]> = Vec::with_capacity(nc * 2);
-        let mut face_cells: Vec<[u32; 2]> = Vec::with_capacity(nc * 2);
+        let mut start = vec![0u32; nv + 1];
+        for t in &triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                start[a.min(b) as usize + 1] += 1;
+            }
+        }
+        for v in 0..nv {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        // (other end, face) per slot; slots past `fill` are unused.
+        let mut slots: Vec<(u32, u32)> = vec![(NONE, NONE); start[nv] as usize];
+        let mut face_vertices: Vec<[u32; 2]> = Vec::with_capacity(nc * 3 / 2 + 2);
+        let mut face_cells: Vec<[u32; 2]> = Vec::with_capacity(nc * 3 / 2 + 2);
         let mut cell_faces = vec![[NONE; 3]; nc];
         for (c, t) in triangles.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
-                let key = (a.min(b), a.max(b));
-                let f = match edge_map.get(&key) {
-                    Some(&f) => {
+                let (lo, hi) = (a.min(b), a.max(b));
+                let (s0, s1) = (start[lo as usize] as usize, fill[lo as usize] as usize);
+                let f = match slots[s0..s1].iter().find(|e| e.0 == hi) {
+                    Some(&(_, f)) => {
                         let fc = &mut face_cells[f as usize];
                         if fc[1] != NONE {
-                            return Err(TopologyError::NonManifoldEdge { a: key.0, b: key.1 });
+                            return Err(TopologyError::NonManifoldEdge { a: lo, b: hi });
                         }
                         fc[1] = c as u32;
                         f
                     }
                     None => {
                         let f = face_vertices.len() as u32;
-                        edge_map.insert(key, f);
+                        slots[s1] = (hi, f);
+                        fill[lo as usize] += 1;
                         face_vertices.push([a, b]);
                         face_cells.push([c as u32, NONE]);
                         f
@@ -628,5 +642,17 @@ mod tests {
         )
         .unwrap_err();
         assert!(matches!(e, TopologyError::VertexOutOfRange { .. }));
+        // Three triangles on one edge.
+        let e = PoreMesh::from_triangles(
+            vec![[0.0, 0.0], [1.0, 0.0], [0.5, 1.0], [0.5, -1.0], [0.5, 2.0]],
+            vec![NONE; 5],
+            vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]],
+            vec![CellKind::Fluid; 3],
+            1.0,
+            1e-9,
+            1.0,
+        )
+        .unwrap_err();
+        assert_eq!(e, TopologyError::NonManifoldEdge { a: 0, b: 1 });
     }
 }

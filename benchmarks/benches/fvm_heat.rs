@@ -1,0 +1,140 @@
+//! One heat step on 100 000 fluid + 100 000 solid cells (structured triangulation, 2 × 2-square
+//! blocks alternating fluid and solid, uniform flow through the T2T channels), on 1 and 2
+//! threads: the explicit sub-step alone, a whole outer step of one sub-step (coefficients
+//! prepared + sub-step), and the backward-Euler conduction step (assembly + sparse Cholesky).
+//!
+//! Run: `cargo bench -p thm-benchmarks --bench fvm_heat`.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use thm_fvm_heat::{
+    FlowInput, GradientScheme, HeatModel, HeatParams, HeatState, HeatStepper, PhaseParams,
+    SolidParams,
+};
+use thm_vpn_mesh::{CellKind, PoreMesh};
+
+fn setup() -> (PoreMesh, HeatModel, FlowInput, HeatState) {
+    let (nx, ny) = (500, 200);
+    let h = 1e-3;
+    let mesh =
+        PoreMesh::structured_rectangle(nx, ny, nx as f64 * h, ny as f64 * h, 8e-3, 0.0115, |p| {
+            let (i, j) = ((p[0] / h) as usize, (p[1] / h) as usize);
+            if (i / 2 + j / 2) % 2 == 0 {
+                CellKind::Fluid
+            } else {
+                CellKind::Solid {
+                    owner: ((j / 2) * (nx / 2) + i / 2) as u32,
+                }
+            }
+        })
+        .unwrap();
+    let n_fluid = mesh.cell_kind.iter().filter(|k| k.is_fluid()).count();
+    assert_eq!(n_fluid, 100_000);
+    assert_eq!(mesh.n_cells() - n_fluid, 100_000);
+    let params = HeatParams {
+        solid: SolidParams {
+            density: 2600.0,
+            specific_heat: 920.0,
+            conductivity: 3.7,
+        },
+        liquid: PhaseParams {
+            specific_heat: 4187.0,
+            conductivity: 0.6,
+            dynamic_viscosity: 10.02e-4,
+        },
+        gas: PhaseParams {
+            specific_heat: 1006.0,
+            conductivity: 0.0262,
+            dynamic_viscosity: 2.0507e-5,
+        },
+        reference_temperature: 278.16,
+        boundaries: Vec::new(),
+        stability_safety: 0.8,
+        gradient: GradientScheme::LeastSquares,
+    };
+    let model = HeatModel::new(&params, &mesh).unwrap();
+    let mut input = FlowInput::liquid_at_rest(&mesh, 1000.0, 1.2);
+    for k in 0..mesh.channels.len() {
+        let f = mesh.channels.face[k] as usize;
+        input.channel_mass_flux[k] =
+            1000.0 * 1e-4 * mesh.face_normal[f][0] * mesh.face_length[f] * mesh.thickness;
+    }
+    let temperature = mesh
+        .cell_centroid
+        .iter()
+        .map(|p| 300.0 + 20.0 * (p[0] * 40.0).sin() * (p[1] * 30.0).cos())
+        .collect();
+    let state = HeatState {
+        time: 0.0,
+        steps: 0,
+        temperature,
+    };
+    (mesh, model, input, state)
+}
+
+fn bench(c: &mut Criterion) {
+    let (mesh, model, input, state) = setup();
+    let mut probe = HeatStepper::new();
+    let limit = probe
+        .stable_time_step(&model, &mesh, &input, &state)
+        .unwrap();
+    let dt = 0.8 * limit;
+    let mut group = c.benchmark_group("fvm_heat_200k_cells");
+    group.sample_size(20);
+    for threads in [1usize, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut stepper = HeatStepper::new();
+        let mut s = state.clone();
+        stepper.prepare(&model, &mesh, &input, &s).unwrap();
+        group.bench_function(format!("explicit_substep_{threads}_threads"), |b| {
+            b.iter(|| {
+                pool.install(|| {
+                    stepper.face_temperatures(&model, &mesh, &s.temperature, 0.0);
+                    stepper.gradients(&model, &mesh, &s.temperature);
+                    stepper.limiters(&mesh, &s.temperature);
+                    stepper.face_heat(&model, &mesh, &input, &s.temperature, 0.0);
+                    stepper.channel_heat(&model, &mesh, &input, &s.temperature);
+                    stepper.advance(&mesh, &mut s.temperature, dt * 1e-6);
+                })
+            })
+        });
+        let mut s = state.clone();
+        group.bench_function(format!("explicit_outer_step_{threads}_threads"), |b| {
+            b.iter(|| {
+                pool.install(|| {
+                    let r = stepper.step(&model, &mesh, &input, &mut s, dt).unwrap();
+                    assert_eq!(r.substeps, 1);
+                })
+            })
+        });
+    }
+    group.finish();
+
+    let rest = FlowInput {
+        channel_mass_flux: vec![0.0; input.channel_mass_flux.len()],
+        ..input.clone()
+    };
+    let mut group = c.benchmark_group("fvm_heat_200k_cells_implicit");
+    group.sample_size(10);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let mut stepper = HeatStepper::new();
+    let mut s = state.clone();
+    group.bench_function("implicit_step_2_threads", |b| {
+        b.iter(|| {
+            pool.install(|| {
+                stepper
+                    .implicit_step(&model, &mesh, &rest, &mut s, 10.0)
+                    .unwrap()
+            })
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,212 @@
+//! Our side of the peer comparisons in `benchmarks/peers/` (YADE, LIGGGHTS).
+//!
+//! ```text
+//! dem_peer write-bar FILE SEED            # the A-Sect. 3 bar (random packing, bonds ≤ 4 mm)
+//! dem_peer write-lattice FILE N PLANE|3D  # bonded lattice of about N particles
+//! dem_peer write-bed FILE N               # settled frictional bed of about N spheres (3D)
+//! dem_peer run-cohesive FILE STEPS DT THREADS   # A-Table 1 law, α_d = 0.08, like CohFrictMat
+//! dem_peer run-bed FILE STEPS DT THREADS        # linear spring + Coulomb, gravity, floor
+//! ```
+//!
+//! `run-*` prints one line: `particles steps seconds particle_steps_per_second`.
+
+use std::path::Path;
+use std::time::Instant;
+use thm_dem::packing::{Packing, PackingParams, lattice_packing, random_packing};
+use thm_dem::*;
+
+/// Stiffness, friction and density of the bed (the LIGGGHTS script uses the same numbers).
+const BED_KN: f64 = 2.0e5;
+const BED_KT: f64 = 0.5e5;
+const BED_MU: f64 = 0.5;
+const BED_DENSITY: f64 = 2500.0;
+const BED_SPACING: f64 = 1.0e-3;
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("dem_peer: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn arg<T: std::str::FromStr>(args: &[String], i: usize, what: &str) -> Result<T, String> {
+    args.get(i)
+        .ok_or(format!("missing {what}"))?
+        .parse()
+        .map_err(|_| format!("bad {what}: {}", args[i]))
+}
+
+fn run() -> Result<(), String> {
+    let args: Vec<String> = std::env::args().collect();
+    let cmd = args.get(1).map(String::as_str).unwrap_or("");
+    match cmd {
+        "write-bar" => {
+            let seed: u64 = arg(&args, 3, "SEED")?;
+            let params = PackingParams {
+                bond_gap: 4e-3,
+                ..PackingParams::paper_a_bar(seed)
+            };
+            let (p, _) = random_packing(&params, 2600.0).map_err(|e| e.to_string())?;
+            p.write_csv(Path::new(&args[2])).map_err(|e| e.to_string())
+        }
+        "write-lattice" => {
+            let n: usize = arg(&args, 3, "N")?;
+            let plane = args.get(4).map(String::as_str) != Some("3D");
+            let kin = if plane {
+                Kinematics::SpheresInPlane
+            } else {
+                Kinematics::Spheres3d
+            };
+            let counts = if plane {
+                let side = (n as f64).sqrt().round() as usize;
+                [side, side, 1]
+            } else {
+                let side = (n as f64).cbrt().round() as usize;
+                [side, side, side]
+            };
+            let p = lattice_packing(kin, counts, 1e-3, 42).map_err(|e| e.to_string())?;
+            p.write_csv(Path::new(&args[2])).map_err(|e| e.to_string())
+        }
+        "write-bed" => {
+            let n: usize = arg(&args, 3, "N")?;
+            write_bed(Path::new(&args[2]), n)
+        }
+        "run-cohesive" | "run-bed" => {
+            let packing = Packing::read_csv(Path::new(args.get(2).ok_or("missing FILE")?))
+                .map_err(|e| e.to_string())?;
+            let steps: u64 = arg(&args, 3, "STEPS")?;
+            let dt: f64 = arg(&args, 4, "DT")?;
+            let threads: usize = arg(&args, 5, "THREADS")?;
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .map_err(|e| e.to_string())?;
+            let (n, seconds) = if cmd == "run-cohesive" {
+                let mut state = packing
+                    .to_state(2600.0, 293.15)
+                    .map_err(|e| e.to_string())?;
+                let law = CohesiveFrictionalParams::paper_a_table_1()
+                    .validate()
+                    .map_err(|e| e.to_string())?;
+                let params = StepperParams {
+                    time_step: dt,
+                    damping: 0.08,
+                    gravity: [0.0; 3],
+                    verlet_skin: 2e-4,
+                };
+                time_run(&pool, &mut state, law, params, steps)?
+            } else {
+                let mut state = bed_state(&packing)?;
+                let law = bed_law()?;
+                let params = StepperParams {
+                    time_step: dt,
+                    damping: 0.0,
+                    gravity: [0.0, 0.0, -9.81],
+                    verlet_skin: 1e-4,
+                };
+                time_run(&pool, &mut state, law, params, steps)?
+            };
+            println!(
+                "{n} {steps} {seconds:.6} {:.1}",
+                n as f64 * steps as f64 / seconds
+            );
+            Ok(())
+        }
+        _ => Err("usage: see the module documentation of benchmarks/src/bin/dem_peer.rs".into()),
+    }
+}
+
+fn time_run<L: ContactLaw>(
+    pool: &rayon::ThreadPool,
+    state: &mut DemState,
+    law: L,
+    params: StepperParams,
+    steps: u64,
+) -> Result<(usize, f64), String> {
+    let mut stepper = Stepper::new(law, params.validate().map_err(|e| e.to_string())?);
+    pool.install(|| stepper.step(state))
+        .map_err(|e| e.to_string())?;
+    let t0 = Instant::now();
+    pool.install(|| stepper.run(state, steps))
+        .map_err(|e| e.to_string())?;
+    Ok((state.particles.len(), t0.elapsed().as_secs_f64()))
+}
+
+fn bed_law() -> Result<LinearSpring, String> {
+    LinearSpringParams {
+        normal_stiffness: BED_KN,
+        tangential_stiffness: BED_KT,
+        friction_coefficient: BED_MU,
+        thermal_bond: None,
+    }
+    .validate()
+    .map_err(|e| e.to_string())
+}
+
+fn bed_state(p: &Packing) -> Result<DemState, String> {
+    let particles = ParticleState::new(
+        Kinematics::Spheres3d,
+        BED_DENSITY,
+        293.15,
+        &p.centres,
+        &p.radii,
+    )
+    .map_err(|e| e.to_string())?;
+    let floor = Wall::new(
+        Vec3::new(0.0, 0.0, -0.5 * BED_SPACING),
+        Vec3::new(0.0, 0.0, 1.0),
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(DemState::new(particles, vec![floor]))
+}
+
+/// A lattice of spheres (radius 0.4–0.45 mm, spacing 1 mm, square footprint, ~N/side² layers)
+/// dropped onto a floor and settled with damping, then written without bonds.
+fn write_bed(path: &Path, n: usize) -> Result<(), String> {
+    let side = ((n as f64) / 10.0).sqrt().round().max(1.0) as usize;
+    let layers = n.div_ceil(side * side);
+    let lattice = lattice_packing(Kinematics::Spheres3d, [side, side, layers], BED_SPACING, 7)
+        .map_err(|e| e.to_string())?;
+    let radii: Vec<f64> = lattice.radii.iter().map(|r| r * 0.8).collect();
+    let packing = Packing {
+        kinematics: Kinematics::Spheres3d,
+        centres: lattice.centres,
+        radii,
+        bonds: Vec::new(),
+    };
+    let mut state = bed_state(&packing)?;
+    let lo = -0.5 * BED_SPACING;
+    let hi = (side as f64 - 0.5) * BED_SPACING;
+    for (point, normal) in [
+        (Vec3::new(lo, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0)),
+        (Vec3::new(hi, 0.0, 0.0), Vec3::new(-1.0, 0.0, 0.0)),
+        (Vec3::new(0.0, lo, 0.0), Vec3::new(0.0, 1.0, 0.0)),
+        (Vec3::new(0.0, hi, 0.0), Vec3::new(0.0, -1.0, 0.0)),
+    ] {
+        state
+            .walls
+            .push(Wall::new(point, normal).map_err(|e| e.to_string())?);
+    }
+    let law = bed_law()?;
+    let dt = 0.3 * critical_time_step(&state, &law);
+    let params = StepperParams {
+        time_step: dt,
+        damping: 0.3,
+        gravity: [0.0, 0.0, -9.81],
+        verlet_skin: 1e-4,
+    };
+    let mut stepper = Stepper::new(law, params.validate().map_err(|e| e.to_string())?);
+    stepper.run(&mut state, 20_000).map_err(|e| e.to_string())?;
+    let settled = Packing {
+        kinematics: Kinematics::Spheres3d,
+        centres: state.particles.position.clone(),
+        radii: state.particles.radius.clone(),
+        bonds: Vec::new(),
+    };
+    settled.write_csv(path).map_err(|e| e.to_string())?;
+    eprintln!(
+        "bed: {} spheres, {side}×{side} footprint, dt_crit-based step {dt:e} s",
+        settled.radii.len()
+    );
+    Ok(())
+}

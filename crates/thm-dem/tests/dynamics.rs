@@ -1,0 +1,486 @@
+//! Whole-step dynamics: rebound, damping, bond breakage in a run, walls, gravity, plane
+//! constraint, thermal expansion, parity across thread counts, save/restore.
+
+mod common;
+use common::*;
+use thm_dem::*;
+
+fn cohesionless() -> CohesiveFrictional {
+    CohesiveFrictionalParams {
+        cohesion: 0.0,
+        tensile_strength: 0.0,
+        ..CohesiveFrictionalParams::paper_a_table_1()
+    }
+    .validate()
+    .unwrap()
+}
+
+/// Head-on collision of two equal spheres; returns kinetic energy before and after.
+fn rebound(damping: f64, kin: Kinematics) -> (f64, f64, Vec3, Vec3) {
+    rebound_dt(damping, kin, 0.02)
+}
+
+fn rebound_dt(damping: f64, kin: Kinematics, dt_fraction: f64) -> (f64, f64, Vec3, Vec3) {
+    let r = 1e-3;
+    let mut state = DemState::new(two_spheres(kin, r, r, 1e-5), vec![]);
+    state.particles.velocity[0] = Vec3::new(0.05, 0.0, 0.0);
+    state.particles.velocity[1] = Vec3::new(-0.05, 0.0, 0.0);
+    let law = cohesionless();
+    let dt = dt_fraction * critical_time_step(&state, &law);
+    let e0 = state.particles.kinetic_energy();
+    let p0 = state.particles.momentum();
+    let mut stepper = Stepper::new(law, stepper_params(dt, damping).validate().unwrap());
+    let mut touched = false;
+    for _ in 0..1_000_000 {
+        stepper.step(&mut state).unwrap();
+        let active = state.contacts.active_count() > 0;
+        touched |= active;
+        if touched && !active {
+            break;
+        }
+    }
+    assert!(touched);
+    assert_eq!(state.contacts.active_count(), 0);
+    (
+        e0,
+        state.particles.kinetic_energy(),
+        p0,
+        state.particles.momentum(),
+    )
+}
+
+#[test]
+fn elastic_rebound_conserves_energy_without_damping() {
+    // Leapfrog is symplectic and second order: what comes out after the contact is the energy
+    // that went in, up to an error that falls as Δt² (from the contact opening and closing
+    // between steps).
+    for kin in [
+        Kinematics::Spheres3d,
+        Kinematics::SpheresInPlane,
+        Kinematics::Disks,
+    ] {
+        let mut errors = Vec::new();
+        for fraction in [0.04, 0.02, 0.01] {
+            let (e0, e1, p0, p1) = rebound_dt(0.0, kin, fraction);
+            errors.push((e1 - e0).abs() / e0);
+            assert!((p1 - p0).norm() <= 1e-15 * p0.norm().max(1e-3));
+        }
+        eprintln!("{kin:?}: relative energy errors {errors:?}");
+        // Bound 0.1 (ω Δt)² with ω² = 2k/m of the pair, Δt = f Δt_crit = f √(m/(k_n + k_s)).
+        for (fraction, err) in [0.04, 0.02, 0.01].iter().zip(&errors) {
+            let omega_dt_sq = 2.0 * fraction * fraction / 1.3;
+            assert!(*err <= 0.1 * omega_dt_sq, "{kin:?}: {errors:?}");
+        }
+    }
+}
+
+#[test]
+fn cundall_damping_removes_the_predicted_share() {
+    // Approach: |F| amplified by (1 + α); rebound: reduced by (1 − α). With a linear spring the
+    // kinetic energy returns in the ratio (1 − α)/(1 + α).
+    for alpha in [0.08, 0.3] {
+        let (e0, e1, _, _) = rebound(alpha, Kinematics::Spheres3d);
+        let expected = (1.0 - alpha) / (1.0 + alpha);
+        assert!(
+            (e1 / e0 - expected).abs() <= 2e-3 * expected,
+            "α = {alpha}: {} vs {expected}",
+            e1 / e0
+        );
+    }
+}
+
+#[test]
+fn bond_breaks_in_a_run_at_t_r_squared_and_is_reported() {
+    let (ra, rb) = (1.5e-3, 2.5e-3);
+    let mut state = DemState::new(
+        two_spheres(Kinematics::SpheresInPlane, ra, rb, 2e-6),
+        vec![],
+    );
+    assert_eq!(state.install_bonds(1e-5).unwrap(), 1);
+    // Grips: both particles move apart at prescribed velocity.
+    let v = 1e-3;
+    state.particles.fixed = vec![true, true];
+    state.particles.velocity[0] = Vec3::new(-v, 0.0, 0.0);
+    state.particles.velocity[1] = Vec3::new(v, 0.0, 0.0);
+    let law = table1();
+    let dt = 1e-7;
+    let mut stepper = Stepper::new(law, stepper_params(dt, 0.08).validate().unwrap());
+    let kn = law
+        .properties(&PairInput {
+            radius_a: ra,
+            radius_b: rb,
+            temperature: 300.0,
+        })
+        .normal_stiffness;
+    let limit = 30e6 * ra * ra;
+    let mut carried: f64 = 0.0;
+    while state.bond_breaks.is_empty() {
+        stepper.step(&mut state).unwrap();
+        if state.bond_breaks.is_empty() {
+            carried = carried.max(-state.contacts.response[0].normal_force);
+            // Force on the grip = tension of the bond (Newton's third law).
+            assert!(
+                (state.particles.force[1].x - state.contacts.response[0].normal_force).abs() < 1e-9
+            );
+        }
+        assert!(state.step < 10_000_000);
+    }
+    let ev = state.bond_breaks[0];
+    assert_eq!((ev.a, ev.b, ev.mode), (0, 1, BreakMode::Tension));
+    let increment = kn * 2.0 * v * dt;
+    assert!(
+        carried <= limit && carried >= limit - increment * 1.0001,
+        "{carried} vs {limit}"
+    );
+    assert_eq!(state.contacts.broken_bond_count(), 1);
+    // The bond was stress-free at creation across its 2 µm gap: it broke after stretching by
+    // T R²/K_n, not at once.
+    let stretch = 2.0 * v * (state.step - 1) as f64 * dt;
+    assert!((stretch - limit / kn).abs() <= 2.0 * v * dt * 1.0001);
+}
+
+#[test]
+fn sphere_settles_on_a_wall_under_gravity() {
+    let r = 2e-3;
+    let p = ParticleState::new(
+        Kinematics::Spheres3d,
+        2600.0,
+        300.0,
+        &[Vec3::new(0.0, 0.0, 1.05 * r)],
+        &[r],
+    )
+    .unwrap();
+    let floor = Wall::new(Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0)).unwrap();
+    let mut state = DemState::new(p, vec![floor]);
+    let law = cohesionless();
+    let dt = 0.2 * critical_time_step(&state, &law);
+    let mut params = stepper_params(dt, 0.3);
+    params.gravity = [0.0, 0.0, -9.81];
+    let mut stepper = Stepper::new(law, params.validate().unwrap());
+    stepper.run(&mut state, 200_000).unwrap();
+    let weight = state.particles.mass[0] * 9.81;
+    assert!(
+        (state.walls[0].force.z + weight).abs() <= 1e-6 * weight,
+        "{:?} vs {weight}",
+        state.walls[0].force
+    );
+    let kn = law
+        .properties(&PairInput {
+            radius_a: r,
+            radius_b: r,
+            temperature: 300.0,
+        })
+        .normal_stiffness;
+    let overlap = r - state.particles.position[0].z;
+    assert!((overlap - weight / kn).abs() <= 1e-6 * weight / kn);
+}
+
+#[test]
+fn moving_plate_pushes_a_sphere_and_feels_the_reaction() {
+    let r = 2e-3;
+    let p = ParticleState::new(
+        Kinematics::SpheresInPlane,
+        2600.0,
+        300.0,
+        &[Vec3::new(0.0, 3e-3, 0.0)],
+        &[r],
+    )
+    .unwrap();
+    let mut plate = Wall::new(Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0)).unwrap();
+    plate.velocity = Vec3::new(0.0, 0.02, 0.0);
+    let mut state = DemState::new(p, vec![plate]);
+    let law = cohesionless();
+    let dt = 0.1 * critical_time_step(&state, &law);
+    let mut stepper = Stepper::new(law, stepper_params(dt, 0.0).validate().unwrap());
+    // Momentum given to the sphere = impulse of the plate force (Newton's third law).
+    let mut impulse = Vec3::ZERO;
+    for _ in 0..400_000 {
+        stepper.step(&mut state).unwrap();
+        impulse -= state.walls[0].force * dt;
+    }
+    let momentum = state.particles.momentum();
+    assert!(momentum.y > 0.0);
+    assert!((momentum - impulse).norm() <= 1e-9 * momentum.norm());
+    assert_eq!(state.particles.position[0].z, 0.0);
+}
+
+#[test]
+fn plane_constraint_keeps_motion_in_the_plane() {
+    let mut p = jittered_lattice(Kinematics::SpheresInPlane, 6, 6, 1, 3, 0.01);
+    for (i, f) in p.external_force.iter_mut().enumerate() {
+        *f = Vec3::new(1e-3, -2e-3, 5e-3 * (i as f64 - 18.0));
+    }
+    for t in p.external_torque.iter_mut() {
+        *t = Vec3::new(1e-6, 1e-6, 1e-7);
+    }
+    let mut state = DemState::new(p, vec![]);
+    let law = table1();
+    let dt = 0.2 * critical_time_step(&state, &law);
+    let mut stepper = Stepper::new(law, stepper_params(dt, 0.0).validate().unwrap());
+    stepper.run(&mut state, 500).unwrap();
+    let p = &state.particles;
+    assert!(p.position.iter().all(|x| x.z == 0.0));
+    assert!(p.velocity.iter().all(|v| v.z == 0.0));
+    assert!(p.angular_velocity.iter().all(|w| w.x == 0.0 && w.y == 0.0));
+    assert!(p.angular_velocity.iter().any(|w| w.z != 0.0));
+}
+
+#[test]
+fn heating_a_bonded_pair_builds_the_thermal_contact_force() {
+    let (ra, rb) = (2e-3, 3e-3);
+    let mut state = DemState::new(two_spheres(Kinematics::SpheresInPlane, ra, rb, 0.0), vec![]);
+    state.install_bonds(1e-6).unwrap();
+    state.particles.fixed = vec![true, true];
+    let law = table1();
+    let alpha = 8e-6;
+    let d_t = 30.0;
+    let t0 = state.particles.temperature[0];
+    // A-Eq. 55 in 30 increments of 1 K vs B-Eq. 37 in one go.
+    let mut incremental = state.particles.clone();
+    for k in 1..=30 {
+        incremental
+            .expand_incremental(alpha, &[t0 + k as f64, t0 + k as f64])
+            .unwrap();
+    }
+    state
+        .particles
+        .expand_from_reference(alpha, t0, &[t0 + d_t; 2])
+        .unwrap();
+    for i in 0..2 {
+        let r0 = state.particles.reference_radius[i];
+        assert!((state.particles.radius[i] - r0 * (1.0 + alpha * d_t)).abs() <= 1e-15 * r0);
+        // Compounded increments differ from the linear law by ≈ r0 (α ΔT)² / 2 · (1 − 1/30).
+        let diff = incremental.radius[i] - state.particles.radius[i];
+        let second_order = r0 * (alpha * d_t).powi(2) / 2.0 * (1.0 - 1.0 / 30.0);
+        assert!(
+            (diff - second_order).abs() <= 1e-3 * second_order,
+            "{diff} vs {second_order}"
+        );
+    }
+    let mut stepper = Stepper::new(law, stepper_params(1e-7, 0.0).validate().unwrap());
+    stepper.step(&mut state).unwrap();
+    let (ra1, rb1) = (state.particles.radius[0], state.particles.radius[1]);
+    let kn = 3.36e9 * 2.0 * ra1 * rb1 / (ra1 + rb1);
+    let expected = kn * alpha * d_t * (ra + rb);
+    let fnorm = state.contacts.response[0].normal_force;
+    assert!(
+        (fnorm - expected).abs() <= 1e-9 * expected,
+        "{fnorm} vs {expected}"
+    );
+}
+
+fn run_lattice(threads: usize, kin: Kinematics) -> DemState {
+    let (nx, ny, nz) = if kin.is_planar() {
+        (40, 40, 1)
+    } else {
+        (12, 12, 12)
+    };
+    let p = jittered_lattice(kin, nx, ny, nz, 7, 0.5);
+    let mut state = DemState::new(
+        p,
+        vec![Wall::new(Vec3::new(0.0, -1e-3, 0.0), Vec3::new(0.0, 1.0, 0.0)).unwrap()],
+    );
+    state.install_bonds(5e-5).unwrap();
+    // Weak bonds so that some break within the run.
+    let law = CohesiveFrictionalParams {
+        tensile_strength: 1e5,
+        cohesion: 5e5,
+        ..CohesiveFrictionalParams::paper_a_table_1()
+    }
+    .validate()
+    .unwrap();
+    let dt = 0.5 * critical_time_step(&state, &law);
+    let mut params = stepper_params(dt, 0.08);
+    params.gravity = [0.0, -9.81e4, 0.0];
+    params.verlet_skin = 1e-5; // frequent neighbour searches and history merges
+    let mut stepper = Stepper::new(law, params.validate().unwrap());
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| stepper.run(&mut state, 300)).unwrap();
+    state
+}
+
+#[test]
+fn one_and_two_threads_give_identical_bits() {
+    for kin in [Kinematics::SpheresInPlane, Kinematics::Spheres3d] {
+        let a = run_lattice(1, kin);
+        let b = run_lattice(2, kin);
+        assert!(a.contacts.len() > 1000);
+        assert!(
+            !a.bond_breaks.is_empty(),
+            "the test should exercise breakage"
+        );
+        let bits = |s: &DemState| -> Vec<u64> {
+            let p = &s.particles;
+            p.position
+                .iter()
+                .chain(&p.velocity)
+                .chain(&p.angular_velocity)
+                .chain(s.contacts.history.iter().map(|h| &h.shear_force))
+                .flat_map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
+                .collect()
+        };
+        assert_eq!(bits(&a), bits(&b));
+        assert_eq!(a, b);
+    }
+}
+
+#[test]
+fn save_restore_round_trip_continues_bit_for_bit() {
+    let p = jittered_lattice(Kinematics::SpheresInPlane, 20, 20, 1, 11, 0.5);
+    let mut state = DemState::new(p, vec![]);
+    state.install_bonds(5e-5).unwrap();
+    let law = table1();
+    let dt = 0.5 * critical_time_step(&state, &law);
+    let params = StepperParams {
+        verlet_skin: 1e-5,
+        ..stepper_params(dt, 0.08)
+    }
+    .validate()
+    .unwrap();
+    let mut stepper = Stepper::new(law, params);
+    stepper.run(&mut state, 150).unwrap();
+    let saved = serde_json::to_string(&state).unwrap();
+    stepper.run(&mut state, 150).unwrap();
+    let mut restored: DemState = serde_json::from_str(&saved).unwrap();
+    let mut fresh = Stepper::new(law, params);
+    fresh.run(&mut restored, 150).unwrap();
+    assert_eq!(restored, state);
+}
+
+#[test]
+fn unstable_time_step_stops_with_place_and_step() {
+    // A sphere squeezed between two walls, stepped far above the critical time step.
+    let p =
+        ParticleState::new(Kinematics::Spheres3d, 2600.0, 300.0, &[Vec3::ZERO], &[1e-3]).unwrap();
+    let walls = vec![
+        Wall::new(Vec3::new(-0.99e-3, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0)).unwrap(),
+        Wall::new(Vec3::new(0.99e-3, 0.0, 0.0), Vec3::new(-1.0, 0.0, 0.0)).unwrap(),
+    ];
+    let mut state = DemState::new(p, walls);
+    state.particles.velocity[0] = Vec3::new(1e-3, 0.0, 0.0);
+    let law = cohesionless();
+    let dt = 50.0 * critical_time_step(&state, &law);
+    let mut stepper = Stepper::new(law, stepper_params(dt, 0.0).validate().unwrap());
+    let err = stepper.run(&mut state, 100_000).unwrap_err();
+    assert!(matches!(err, DemError::NonFinite { .. }), "{err}");
+}
+
+#[test]
+fn bad_parameters_are_rejected_with_the_field() {
+    let e = StepperParams {
+        time_step: -1.0,
+        ..stepper_params(1.0, 0.0)
+    }
+    .validate()
+    .unwrap_err();
+    assert!(matches!(
+        e,
+        DemError::InvalidParameter {
+            field: "time_step",
+            ..
+        }
+    ));
+    let e = StepperParams {
+        damping: 1.0,
+        ..stepper_params(1.0, 0.0)
+    }
+    .validate()
+    .unwrap_err();
+    assert!(matches!(
+        e,
+        DemError::InvalidParameter {
+            field: "damping",
+            ..
+        }
+    ));
+    let e = CohesiveFrictionalParams {
+        friction_angle_deg: f64::NAN,
+        ..CohesiveFrictionalParams::paper_a_table_1()
+    }
+    .validate()
+    .unwrap_err();
+    assert!(matches!(
+        e,
+        DemError::InvalidParameter {
+            field: "friction_angle_deg",
+            ..
+        }
+    ));
+    let e =
+        ParticleState::new(Kinematics::Disks, 2600.0, 300.0, &[Vec3::ZERO], &[-1.0]).unwrap_err();
+    assert!(matches!(
+        e,
+        DemError::InvalidParticle {
+            index: 0,
+            field: "radius",
+            ..
+        }
+    ));
+    let toml_like =
+        r#"{"time_step":1e-7,"damping":0.1,"gravity":[0,0,0],"verlet_skin":1e-4,"extra":1}"#;
+    assert!(serde_json::from_str::<StepperParams>(toml_like).is_err());
+}
+
+#[test]
+fn friction_work_equals_the_kinetic_energy_lost_by_a_sliding_disk() {
+    // A disk pressed onto a floor by gravity slides at 0.2 m/s; without damping, the kinetic
+    // energy lost (translation + rotation) equals the friction work summed over the steps
+    // (B-Eq. 32) up to the small elastic energy left in the springs at the end.
+    let r = 2e-3;
+    let p = ParticleState::new(
+        Kinematics::Disks,
+        2600.0,
+        300.0,
+        &[Vec3::new(0.0, r, 0.0)],
+        &[r],
+    )
+    .unwrap();
+    let floor = Wall::new(Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0)).unwrap();
+    let mut state = DemState::new(p, vec![floor]);
+    let law = LinearSpringParams {
+        normal_stiffness: 1e5,
+        tangential_stiffness: 4e4,
+        friction_coefficient: 0.4,
+        thermal_bond: None,
+    }
+    .validate()
+    .unwrap();
+    let dt = 0.05 * critical_time_step(&state, &law);
+    let mut params = stepper_params(dt, 0.0);
+    params.gravity = [0.0, -9.81, 0.0];
+    let mut stepper = Stepper::new(law, params.validate().unwrap());
+    // Settle vertically first (no sliding), then launch.
+    let m = state.particles.mass[0];
+    let g = 9.81;
+    state.particles.position[0].y = r - m * g / 1e5;
+    stepper.step(&mut state).unwrap();
+    state.particles.velocity[0] = Vec3::new(1.0, 0.0, 0.0);
+    let e0 = state.particles.kinetic_energy();
+    let mut work = 0.0;
+    for _ in 0..20_000 {
+        stepper.step(&mut state).unwrap();
+        work += state.wall_contacts.friction_work();
+    }
+    let e1 = state.particles.kinetic_energy();
+    // Rolling without slip at the end: v = 2/3 v0 for a disk (I = mR²/2) ⇒ E1/E0 = 2/3, up
+    // to the vibration of the stuck tangential spring.
+    let v = state.particles.velocity[0].x;
+    // Amplitude of that vibration: the friction force at sticking over √(k_t m_eff), with the
+    // effective mass m I/(I + mR²) = m/3 of a rolling disk.
+    let vibration = 0.4 * m * g / (4e4 * m / 3.0).sqrt();
+    assert!(
+        (v - 2.0 / 3.0).abs() <= vibration,
+        "v = {v}, vibration amplitude {vibration}"
+    );
+    // Residual: elastic shear + normal vibration energy, bounded by F²/k terms.
+    let elastic_bound = (0.4 * m * g).powi(2) / 4e4 + (m * g).powi(2) / 1e5;
+    assert!(
+        ((e0 - e1) - work).abs() <= elastic_bound,
+        "lost {} vs work {work}",
+        e0 - e1
+    );
+    assert!(work > 100.0 * elastic_bound);
+}

@@ -1,0 +1,105 @@
+//! Packing generator: reproducibility, porosity, containment, stress-free bonds, CSV.
+
+mod common;
+use common::*;
+use thm_dem::packing::*;
+use thm_dem::*;
+
+fn bar(seed: u64) -> (Packing, PackingReport) {
+    random_packing(&PackingParams::paper_a_bar(seed), 2600.0).unwrap()
+}
+
+#[test]
+fn bar_packing_meets_the_paper_specimen() {
+    let (p, rep) = bar(1);
+    eprintln!("{} particles, {rep:?}", p.radii.len());
+    assert!((rep.porosity - 0.10).abs() < 1e-12);
+    // A-Sect. 3: about 40–45 spheres of 4–8 mm fit a 20 × 80 mm bar at 10 % porosity; with
+    // uniform diameters E[πd²/4] = 29.3 mm², so 0.9 · 1600 / 29.3 ≈ 49.
+    assert!((40..=55).contains(&p.radii.len()));
+    assert!(rep.radius_scale <= 1.0 && rep.radius_scale > 0.97);
+    let d_min = 0.004 * rep.radius_scale;
+    assert!(
+        p.radii
+            .iter()
+            .all(|&r| 2.0 * r >= d_min * (1.0 - 1e-12) && 2.0 * r <= 0.008 * (1.0 + 1e-12))
+    );
+    // Inside the bar up to the overlap the walls allowed: walls are as stiff as contacts, so a
+    // particle pokes through a wall by no more than the largest particle overlap.
+    let poke = rep.max_relative_overlap;
+    for (c, r) in p.centres.iter().zip(&p.radii) {
+        assert!(c.x - r > -poke * r && c.x + r < 0.02 + poke * r);
+        assert!(c.y - r > -poke * r && c.y + r < 0.08 + poke * r);
+        assert_eq!(c.z, 0.0);
+    }
+    // 10 % porosity counted as Σ disk area is denser than random disks jam (≈ 16 %), so the
+    // compaction leaves overlaps of the order of (0.16 − 0.10) of a radius, not more than 1/3.
+    assert!(rep.max_relative_overlap < 1.0 / 3.0);
+    assert!(rep.bond_coordination > 3.0);
+}
+
+#[test]
+fn packing_is_reproducible_from_its_seed() {
+    let (a, _) = bar(5);
+    let (b, _) = bar(5);
+    let (c, _) = bar(6);
+    assert_eq!(a, b);
+    assert_ne!(a, c);
+}
+
+#[test]
+fn bonds_are_stress_free_at_creation() {
+    let (p, _) = bar(2);
+    let mut state = p.to_state(2600.0, 293.15).unwrap();
+    assert_eq!(state.contacts.intact_bond_count(), p.bonds.len());
+    let mut stepper = Stepper::new(table1(), stepper_params(2e-7, 0.08).validate().unwrap());
+    stepper.run(&mut state, 10).unwrap();
+    for r in &state.contacts.response {
+        assert_eq!(r.force_on_b, Vec3::ZERO);
+    }
+    assert!(state.particles.velocity.iter().all(|v| *v == Vec3::ZERO));
+    assert_eq!(state.particles.position, p.centres);
+}
+
+#[test]
+fn csv_round_trip_is_exact() {
+    let (p, _) = bar(3);
+    let q = Packing::from_csv(&p.to_csv()).unwrap();
+    assert_eq!(p, q);
+    let l = lattice_packing(Kinematics::Spheres3d, [4, 3, 2], 1e-3, 9).unwrap();
+    assert_eq!(Packing::from_csv(&l.to_csv()).unwrap(), l);
+}
+
+#[test]
+fn bad_csv_names_the_line() {
+    let text =
+        "# thm-dem packing; kinematics=disks\nparticle,0,0,0,1e-3\nparticle,1e-3,0,zero,1e-3\n";
+    match Packing::from_csv(text) {
+        Err(DemError::PackingFile { line: 3, .. }) => {}
+        other => panic!("{other:?}"),
+    }
+    let text = "# thm-dem packing; kinematics=disks\nparticle,0,0,0,1e-3\nbond,0,4\n";
+    assert!(Packing::from_csv(text).is_err());
+}
+
+#[test]
+fn generator_rejects_bad_parameters() {
+    let mut p = PackingParams::paper_a_bar(1);
+    p.porosity = 1.5;
+    assert!(matches!(
+        random_packing(&p, 2600.0),
+        Err(DemError::InvalidParameter {
+            field: "porosity",
+            ..
+        })
+    ));
+    let mut p = PackingParams::paper_a_bar(1);
+    p.diameter_max = 0.001;
+    assert!(matches!(
+        random_packing(&p, 2600.0),
+        Err(DemError::InvalidParameter {
+            field: "diameter_max",
+            ..
+        })
+    ));
+}

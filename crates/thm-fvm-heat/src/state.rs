@@ -1,0 +1,150 @@
+//! The caller-owned state and the per-step input from the flow solver.
+
+use serde::{Deserialize, Serialize};
+use thm_vpn_mesh::PoreMesh;
+
+use crate::HeatError;
+
+/// Temperatures of all cells (fluid and solid), struct-of-arrays, owned by the caller.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HeatState {
+    /// Simulated time [s].
+    pub time: f64,
+    /// Explicit sub-steps (or implicit steps) taken so far.
+    pub steps: u64,
+    /// Cell-centred temperature [K], one per mesh cell.
+    pub temperature: Vec<f64>,
+}
+
+impl HeatState {
+    /// All cells at `temperature` [K], at time 0.
+    pub fn uniform(mesh: &PoreMesh, temperature: f64) -> Self {
+        Self {
+            time: 0.0,
+            steps: 0,
+            temperature: vec![temperature; mesh.n_cells()],
+        }
+    }
+}
+
+/// What the flow solver gives the heat solver for one step: phase fractions and densities of
+/// the fluid cells and the mass fluxes of the channels and of the open boundary faces.
+///
+/// Per-cell arrays have one entry per mesh cell; entries of solid cells are ignored.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FlowInput {
+    /// Liquid volume fraction α_q ∈ [0, 1] per cell (gas fraction 1 − α_q).
+    pub liquid_fraction: Vec<f64>,
+    /// Liquid density ρ_q per cell [kg/m³].
+    pub liquid_density: Vec<f64>,
+    /// Gas density ρ_p per cell [kg/m³].
+    pub gas_density: Vec<f64>,
+    /// Total (both phases) mass flux per channel [kg/s], positive from `channels.cells[k][0]`
+    /// to `channels.cells[k][1]`.
+    pub channel_mass_flux: Vec<f64>,
+    /// Mass flux through each face [kg/s], positive outward; only boundary faces of fluid
+    /// cells may be non-zero (inflow/outflow through the specimen's boundary).
+    pub boundary_mass_flux: Vec<f64>,
+}
+
+impl FlowInput {
+    /// Fluid at rest, fully liquid with uniform density `liquid_density`; the gas density is
+    /// set to `gas_density` (irrelevant while α_q = 1).
+    pub fn liquid_at_rest(mesh: &PoreMesh, liquid_density: f64, gas_density: f64) -> Self {
+        let n = mesh.n_cells();
+        Self {
+            liquid_fraction: vec![1.0; n],
+            liquid_density: vec![liquid_density; n],
+            gas_density: vec![gas_density; n],
+            channel_mass_flux: vec![0.0; mesh.channels.len()],
+            boundary_mass_flux: vec![0.0; mesh.n_faces()],
+        }
+    }
+
+    /// Checks lengths against `mesh` and ranges of the fluid-cell entries.
+    pub fn validate(&self, mesh: &PoreMesh) -> Result<(), HeatError> {
+        let n = mesh.n_cells();
+        for (what, len, expected) in [
+            ("liquid_fraction", self.liquid_fraction.len(), n),
+            ("liquid_density", self.liquid_density.len(), n),
+            ("gas_density", self.gas_density.len(), n),
+            (
+                "channel_mass_flux",
+                self.channel_mass_flux.len(),
+                mesh.channels.len(),
+            ),
+            (
+                "boundary_mass_flux",
+                self.boundary_mass_flux.len(),
+                mesh.n_faces(),
+            ),
+        ] {
+            if len != expected {
+                return Err(HeatError::LengthMismatch {
+                    what,
+                    expected,
+                    got: len,
+                });
+            }
+        }
+        for c in 0..n {
+            if !mesh.cell_kind[c].is_fluid() {
+                continue;
+            }
+            let a = self.liquid_fraction[c];
+            if !(a.is_finite() && (0.0..=1.0).contains(&a)) {
+                return Err(HeatError::InputOutOfRange {
+                    quantity: "liquid_fraction",
+                    index: c,
+                    range: "in [0, 1]",
+                    value: a,
+                });
+            }
+            for (quantity, v) in [
+                ("liquid_density", self.liquid_density[c]),
+                ("gas_density", self.gas_density[c]),
+            ] {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(HeatError::InputOutOfRange {
+                        quantity,
+                        index: c,
+                        range: ">= 0 kg/m³",
+                        value: v,
+                    });
+                }
+            }
+            let rho = a * self.liquid_density[c] + (1.0 - a) * self.gas_density[c];
+            if rho <= 0.0 {
+                return Err(HeatError::InputOutOfRange {
+                    quantity: "effective fluid density",
+                    index: c,
+                    range: "> 0 kg/m³",
+                    value: rho,
+                });
+            }
+        }
+        for (k, &m) in self.channel_mass_flux.iter().enumerate() {
+            if !m.is_finite() {
+                return Err(HeatError::InputOutOfRange {
+                    quantity: "channel_mass_flux",
+                    index: k,
+                    range: "finite",
+                    value: m,
+                });
+            }
+        }
+        for (f, &m) in self.boundary_mass_flux.iter().enumerate() {
+            let [c0, c1] = mesh.face_cells[f];
+            let open = c1 == thm_vpn_mesh::NONE && mesh.cell_kind[c0 as usize].is_fluid();
+            if !m.is_finite() || (!open && m != 0.0) {
+                return Err(HeatError::InputOutOfRange {
+                    quantity: "boundary_mass_flux",
+                    index: f,
+                    range: "finite, and 0 except on boundary faces of fluid cells",
+                    value: m,
+                });
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,178 @@
+//! Solver parameters (serde form) and their validated counterpart.
+
+use crate::boundary::{RigidWall, SurfaceLoad, TemperatureCondition, VelocityCondition};
+use crate::error::MpmError;
+use crate::grid::{Grid, GridParameters};
+use serde::{Deserialize, Serialize};
+
+fn one() -> f64 {
+    1.0
+}
+
+/// Parameters of an MPM model (serde form; validated by [`MpmConfig::new`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MpmParameters {
+    /// The background grid.
+    pub grid: GridParameters,
+    /// PIC fraction `α_PIC ∈ [0, 1]` of B-Eqs. 25–27 (0 = pure FLIP).
+    #[serde(default)]
+    pub pic_fraction: f64,
+    /// Grid damping `α_g ∈ [0, 1]` of B-Eqs. 26–27.
+    #[serde(default)]
+    pub grid_damping: f64,
+    /// Particle damping `α_p ∈ [0, 1]` of B-Eqs. 26–27.
+    #[serde(default)]
+    pub particle_damping: f64,
+    /// The factor `b > 0` of the thermal time-step limit B-Eq. 31 (paper default 1).
+    #[serde(default = "one")]
+    pub thermal_time_step_factor: f64,
+    /// Body force per unit mass `b_i` (m/s²), e.g. gravity.
+    #[serde(default)]
+    pub gravity: [f64; 2],
+    /// Prescribed nodal velocities.
+    #[serde(default)]
+    pub velocity_conditions: Vec<VelocityCondition>,
+    /// Prescribed nodal temperatures.
+    #[serde(default)]
+    pub temperature_conditions: Vec<TemperatureCondition>,
+    /// Tractions and heat fluxes through the virtual boundary layer.
+    #[serde(default)]
+    pub surface_loads: Vec<SurfaceLoad>,
+    /// Rigid walls and plates.
+    #[serde(default)]
+    pub walls: Vec<RigidWall>,
+}
+
+impl MpmParameters {
+    /// Parameters with the given grid and everything else at its default (pure FLIP, no
+    /// damping, `b = 1`, no gravity, no boundary conditions).
+    pub fn on_grid(grid: GridParameters) -> Self {
+        Self {
+            grid,
+            pic_fraction: 0.0,
+            grid_damping: 0.0,
+            particle_damping: 0.0,
+            thermal_time_step_factor: 1.0,
+            gravity: [0.0; 2],
+            velocity_conditions: Vec::new(),
+            temperature_conditions: Vec::new(),
+            surface_loads: Vec::new(),
+            walls: Vec::new(),
+        }
+    }
+}
+
+/// Validated parameters. Construct with [`MpmConfig::new`]; serialisable for the record, but
+/// not deserialisable (rebuild it from [`MpmParameters`], which validates).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MpmConfig {
+    pub(crate) grid: Grid,
+    pub(crate) params: MpmParameters,
+    /// Per node: bit 0 = hold v_x, bit 1 = hold v_y.
+    pub(crate) velocity_mask: Vec<u8>,
+    /// Per node: the prescribed temperature, NaN where free.
+    pub(crate) fixed_temperature: Vec<f64>,
+}
+
+fn unit_interval(name: &str, v: f64) -> Result<(), MpmError> {
+    if (0.0..=1.0).contains(&v) {
+        Ok(())
+    } else {
+        Err(MpmError::InvalidParameter {
+            name: name.into(),
+            value: v,
+            allowed: "[0, 1]",
+        })
+    }
+}
+
+impl MpmConfig {
+    /// Validates the parameters.
+    pub fn new(params: MpmParameters) -> Result<Self, MpmError> {
+        let grid = Grid::new(&params.grid)?;
+        unit_interval("pic_fraction", params.pic_fraction)?;
+        unit_interval("grid_damping", params.grid_damping)?;
+        unit_interval("particle_damping", params.particle_damping)?;
+        let b = params.thermal_time_step_factor;
+        if !(b.is_finite() && b > 0.0) {
+            return Err(MpmError::InvalidParameter {
+                name: "thermal_time_step_factor".into(),
+                value: b,
+                allowed: "(0, inf)",
+            });
+        }
+        for (k, g) in params.gravity.iter().enumerate() {
+            if !g.is_finite() {
+                return Err(MpmError::InvalidParameter {
+                    name: format!("gravity[{k}]"),
+                    value: *g,
+                    allowed: "finite m/s^2",
+                });
+            }
+        }
+        for (k, t) in params.temperature_conditions.iter().enumerate() {
+            if !t.temperature.is_finite() {
+                return Err(MpmError::InvalidParameter {
+                    name: format!("temperature_conditions[{k}].temperature"),
+                    value: t.temperature,
+                    allowed: "finite",
+                });
+            }
+        }
+        for (k, s) in params.surface_loads.iter().enumerate() {
+            if !(s.layer_thickness.is_finite() && s.layer_thickness > 0.0) {
+                return Err(MpmError::InvalidParameter {
+                    name: format!("surface_loads[{k}].layer_thickness"),
+                    value: s.layer_thickness,
+                    allowed: "(0, inf) m",
+                });
+            }
+            let vals = [s.traction[0], s.traction[1], s.inward_heat_flux];
+            if let Some(v) = vals.iter().find(|v| !v.is_finite()) {
+                return Err(MpmError::InvalidParameter {
+                    name: format!("surface_loads[{k}].traction/inward_heat_flux"),
+                    value: *v,
+                    allowed: "finite",
+                });
+            }
+        }
+        let mut params = params;
+        for (k, w) in params.walls.iter_mut().enumerate() {
+            *w = w.validated(k)?;
+        }
+        let [nx, ny] = grid.nodes();
+        let mut velocity_mask = vec![0u8; nx * ny];
+        let mut fixed_temperature = vec![f64::NAN; nx * ny];
+        for j in 0..ny {
+            for i in 0..nx {
+                let n = grid.node_index(i, j);
+                for c in &params.velocity_conditions {
+                    if c.nodes.contains(&grid, i, j) {
+                        velocity_mask[n] |= u8::from(c.fix_x) | (u8::from(c.fix_y) << 1);
+                    }
+                }
+                for c in &params.temperature_conditions {
+                    if c.nodes.contains(&grid, i, j) {
+                        fixed_temperature[n] = c.temperature;
+                    }
+                }
+            }
+        }
+        Ok(Self {
+            grid,
+            params,
+            velocity_mask,
+            fixed_temperature,
+        })
+    }
+
+    /// The grid.
+    pub fn grid(&self) -> &Grid {
+        &self.grid
+    }
+    /// The (validated) parameters.
+    pub fn parameters(&self) -> &MpmParameters {
+        &self.params
+    }
+}

@@ -1,0 +1,363 @@
+//! The DEM step of an RVE: a fixed sequence of named stages over caller-owned state.
+//!
+//! 1. [`RveStepper::update_neighbours`]: Verlet check; when a disk moved, the cell deformed or
+//!    a radius grew enough to use up the skin, disks are wrapped back into the cell
+//!    (B-Eqs. 43–44), the periodic grid lists the near pairs and the contact histories are
+//!    carried over pair by pair;
+//! 2. [`RveStepper::compute_contact_forces`]: every listed pair, in list order, with the
+//!    periodic branch vector `b = x_b + H s − x_a` and the relative velocity
+//!    `v_f,b − v_f,a + L b` (B-Eq. 45), through `thm-dem`'s contact law (B-Eqs. 35–40); sums
+//!    disk forces, the contact part of B-Eq. 49 and the friction work of B-Eq. 32;
+//! 3. [`RveStepper::integrate`]: local damping, leapfrog for the fluctuating velocity, then the
+//!    centres move with `ẋ = v_f + L x` and the cell with `Ḣ = L H` (B-Eqs. 42, 46), both by
+//!    the same explicit step so that reduced coordinates see only the fluctuation.
+//!
+//! [`RveStepper::respond`] wraps `substeps` steps with the temperature update (B-Eq. 37) and
+//! returns stress, heat source and conductivity (B-Eqs. 33, 34, 49).
+
+use crate::error::{RveError, check_positive};
+use crate::mat2::Mat2;
+use crate::measure;
+use crate::neighbour::{Candidate, PeriodicGrid};
+use crate::params::RveConfig;
+use crate::state::{PeriodicContacts, RveState};
+use serde::{Deserialize, Serialize};
+use thm_dem::{ContactHistory, ContactKinematics, ContactLaw, PairInput, Vec3};
+
+/// What the material point imposes on its RVE for one macroscopic step.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RveLoad {
+    /// Velocity gradient **L** \[1/s\], held over the step.
+    pub velocity_gradient: Mat2,
+    /// Temperature of the material point \[K\].
+    pub temperature: f64,
+    /// Macroscopic time step Δt \[s\].
+    pub dt: f64,
+    /// DEM steps per macroscopic step `N` (B-Eq. 33); the DEM step is `Δt / N`.
+    pub substeps: u32,
+}
+
+/// What the RVE returns to its material point.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RveResponse {
+    /// Homogenised stress σ of B-Eq. 49 \[Pa\], compression positive (the paper's sign).
+    pub stress: Mat2,
+    /// Friction heat source `Q = Σ E_f / (V N Δt_D)` of B-Eq. 33 \[W/m³\].
+    pub heat_source: f64,
+    /// Fabric conductivity tensor of B-Eq. 34 \[W/(m K)\].
+    pub conductivity: Mat2,
+}
+
+/// Advances an [`RveState`]. Holds the configuration and scratch buffers only, so one stepper
+/// can advance any state (a batch keeps one per worker).
+#[derive(Debug, Clone)]
+pub struct RveStepper {
+    config: RveConfig,
+    grid: PeriodicGrid,
+    candidates: Vec<Candidate>,
+    merged: PeriodicContacts,
+    temperature: Vec<f64>,
+}
+
+impl RveStepper {
+    /// A stepper with empty scratch buffers.
+    pub fn new(config: RveConfig) -> Self {
+        Self {
+            config,
+            grid: PeriodicGrid::default(),
+            candidates: Vec::new(),
+            merged: PeriodicContacts::default(),
+            temperature: Vec::new(),
+        }
+    }
+
+    /// The configuration.
+    #[inline]
+    pub fn config(&self) -> &RveConfig {
+        &self.config
+    }
+
+    /// Replaces the configuration (e.g. the friction coefficient after consolidation).
+    pub fn set_config(&mut self, config: RveConfig) {
+        self.config = config;
+    }
+
+    /// One DEM step of `dt` under the velocity gradient `l`. Returns the friction heat of the
+    /// step, `E_f` of B-Eq. 32 \[J\].
+    pub fn step(&mut self, state: &mut RveState, l: &Mat2, dt: f64) -> Result<f64, RveError> {
+        self.update_neighbours(state)?;
+        let heat = self.compute_contact_forces(state, l, dt);
+        self.integrate(state, l, dt)?;
+        state.step += 1;
+        state.time += dt;
+        state.friction_heat_total += heat;
+        Ok(heat)
+    }
+
+    /// Verlet skin \[m\] of this configuration for a state.
+    fn skin(&self, state: &RveState) -> f64 {
+        let r_min = state
+            .disks
+            .reference_radius
+            .iter()
+            .fold(f64::INFINITY, |m, &r| m.min(r));
+        self.config.params().verlet_skin_ratio * r_min
+    }
+
+    /// Stage 1: rebuilds the pair list when the skin may be used up. Returns whether it did.
+    pub fn update_neighbours(&mut self, state: &mut RveState) -> Result<bool, RveError> {
+        if !self.needs_rebuild(state) {
+            return Ok(false);
+        }
+        let skin = self.skin(state);
+        // Wrap disks back into the cell (B-Eqs. 43–44); fluctuating velocities are periodic
+        // (B-Eq. 45b) and stay as they are.
+        for x in &mut state.disks.position {
+            let p = state.cell.period_of(*x);
+            if p != [0, 0] {
+                *x -= state.cell.lattice_vector(p);
+            }
+        }
+        self.grid.pairs_within(
+            &state.cell,
+            &state.disks.position,
+            &state.disks.radius,
+            skin,
+            &mut self.candidates,
+        )?;
+        // Carry the histories over, pair by pair (both lists are sorted).
+        let old = &state.contacts;
+        self.merged.clear();
+        let mut k = 0;
+        for &(pair, shift) in &self.candidates {
+            while k < old.len() && old.pair[k] < pair {
+                k += 1;
+            }
+            let history = if k < old.len() && old.pair[k] == pair {
+                old.history[k]
+            } else {
+                ContactHistory::UNBONDED
+            };
+            self.merged.push(pair, shift, history);
+        }
+        // Intact bonds whose pair left the list would vanish silently; the list keeps every
+        // pair within the skin, and a bond stretched beyond the skin has broken in tension
+        // long before (its strength is far below k_n · skin for B-Eq. 38's β_b ≪ 1).
+        std::mem::swap(&mut state.contacts, &mut self.merged);
+        let anchor = &mut state.anchor;
+        anchor.reduced_position.clear();
+        anchor.reduced_position.extend(
+            state
+                .disks
+                .position
+                .iter()
+                .map(|&x| state.cell.to_reduced(x)),
+        );
+        anchor.radius.clear();
+        anchor.radius.extend_from_slice(&state.disks.radius);
+        anchor.cell = *state.cell.matrix();
+        anchor.skin = skin;
+        Ok(true)
+    }
+
+    fn needs_rebuild(&self, state: &RveState) -> bool {
+        let a = &state.anchor;
+        let n = state.len();
+        if a.skin <= 0.0 || a.reduced_position.len() != n || a.radius.len() != n {
+            return true;
+        }
+        let h = state.cell.matrix();
+        let deformation = match a.cell.inverse() {
+            Some(inv) => h.mul(&inv).add_scaled(&Mat2::IDENTITY, -1.0),
+            None => return true,
+        };
+        let e = deformation.contract(&deformation).sqrt();
+        let mut max_disp2 = 0.0_f64;
+        let mut max_growth = 0.0_f64;
+        let mut r_max = 0.0_f64;
+        for i in 0..n {
+            let d = h.apply(state.cell.to_reduced(state.disks.position[i]) - a.reduced_position[i]);
+            max_disp2 = max_disp2.max(d.norm_squared());
+            max_growth = max_growth.max(state.disks.radius[i] - a.radius[i]);
+            r_max = r_max.max(a.radius[i]);
+        }
+        let used = 2.0 * max_disp2.sqrt() + e * (2.0 * r_max + a.skin) + 2.0 * max_growth;
+        !used.is_finite() || used >= a.skin
+    }
+
+    /// Stage 2: contact forces at the present configuration. Clears and fills the disk
+    /// force and torque arrays, the per-contact force and branch, and the contact moment
+    /// `Σ f ⊗ b`. Returns the friction work of the step (B-Eq. 32) \[J\].
+    pub fn compute_contact_forces(&self, state: &mut RveState, l: &Mat2, dt: f64) -> f64 {
+        let law = self.config.law();
+        let disks = &mut state.disks;
+        for f in &mut disks.force {
+            *f = Vec3::ZERO;
+        }
+        for t in &mut disks.torque {
+            *t = Vec3::ZERO;
+        }
+        let contacts = &mut state.contacts;
+        let cell = &state.cell;
+        let mut moment = Mat2::ZERO;
+        let mut heat = 0.0;
+        for c in 0..contacts.pair.len() {
+            let [a, b] = contacts.pair[c];
+            let (a, b) = (a as usize, b as usize);
+            let branch =
+                disks.position[b] + cell.lattice_vector(contacts.shift[c]) - disks.position[a];
+            contacts.branch[c] = branch;
+            let history = &mut contacts.history[c];
+            let (ra, rb) = (disks.radius[a], disks.radius[b]);
+            let reach = ra + rb;
+            if history.bond != thm_dem::BondState::Intact && branch.norm_squared() >= reach * reach
+            {
+                // Apart and unbonded: the law would return zero and clear the shear force.
+                history.shear_force = Vec3::ZERO;
+                history.normal = Vec3::ZERO;
+                contacts.force_on_b[c] = Vec3::ZERO;
+                continue;
+            }
+            let relative_velocity = disks.velocity[b] - disks.velocity[a] + l.apply(branch);
+            let kinematics = ContactKinematics::from_pair(
+                branch,
+                relative_velocity,
+                disks.angular_velocity[a],
+                disks.angular_velocity[b],
+                ra,
+                rb,
+                dt,
+            );
+            let pair = PairInput {
+                radius_a: ra,
+                radius_b: rb,
+                temperature: 0.5 * (disks.temperature[a] + disks.temperature[b]),
+            };
+            let r = law.respond(&pair, &kinematics, history);
+            contacts.force_on_b[c] = r.force_on_b;
+            disks.force[b] += r.force_on_b;
+            disks.force[a] -= r.force_on_b;
+            disks.torque[a] += r.torque_on_a;
+            disks.torque[b] += r.torque_on_b;
+            let m = Mat2::outer(r.force_on_b, branch);
+            moment = moment.add_scaled(&m, 1.0);
+            heat += r.friction_work;
+        }
+        state.contact_moment = moment;
+        heat
+    }
+
+    /// Stage 3: local damping and the leapfrog step of the fluctuating motion, the affine
+    /// motion of the centres and the deformation of the cell. Stops with
+    /// [`RveError::NonFinite`] on the first non-finite velocity or position.
+    pub fn integrate(&self, state: &mut RveState, l: &Mat2, dt: f64) -> Result<(), RveError> {
+        let alpha = self.config.params().local_damping;
+        let disks = &mut state.disks;
+        for i in 0..disks.position.len() {
+            let (m, inertia) = (disks.mass[i], disks.inertia[i]);
+            let mut f = disks.force[i];
+            let mut t = disks.torque[i].z;
+            let v = disks.velocity[i];
+            let w = disks.angular_velocity[i].z;
+            if alpha > 0.0 {
+                f.x -= alpha * f.x.abs() * sign(v.x + 0.5 * f.x * dt / m);
+                f.y -= alpha * f.y.abs() * sign(v.y + 0.5 * f.y * dt / m);
+                t -= alpha * t.abs() * sign(w + 0.5 * t * dt / inertia);
+            }
+            let v = Vec3::new(v.x + f.x / m * dt, v.y + f.y / m * dt, 0.0);
+            let w = w + t / inertia * dt;
+            let x = disks.position[i];
+            let x_new = x + (v + l.apply(x)) * dt;
+            if !(v.is_finite() && w.is_finite()) {
+                return Err(RveError::NonFinite {
+                    quantity: "fluctuating velocity",
+                    index: i,
+                    step: state.step,
+                });
+            }
+            if !x_new.is_finite() {
+                return Err(RveError::NonFinite {
+                    quantity: "position",
+                    index: i,
+                    step: state.step,
+                });
+            }
+            disks.velocity[i] = v;
+            disks.angular_velocity[i] = Vec3::new(0.0, 0.0, w);
+            disks.position[i] = x_new;
+        }
+        state.cell.deform(l, dt)
+    }
+
+    /// Sets every disk to `temperature` and its radius to `R⁽⁰⁾ (1 + β (T − T_ref))`
+    /// (B-Eq. 37); masses are kept, inertias follow the radius.
+    pub fn set_temperature(
+        &mut self,
+        state: &mut RveState,
+        temperature: f64,
+    ) -> Result<(), RveError> {
+        check_positive("temperature", temperature)?;
+        if state.disks.temperature.iter().all(|&t| t == temperature) {
+            return Ok(());
+        }
+        self.temperature.clear();
+        self.temperature.resize(state.len(), temperature);
+        let p = self.config.params();
+        state.disks.expand_from_reference(
+            p.thermal_expansion_coefficient,
+            p.reference_temperature,
+            &self.temperature,
+        )?;
+        Ok(())
+    }
+
+    /// One macroscopic step of a material point: temperature (B-Eq. 37), `substeps` DEM
+    /// steps of `Δt / N` under **L**, then stress (B-Eq. 49), heat source (B-Eq. 33) and
+    /// conductivity (B-Eq. 34).
+    pub fn respond(
+        &mut self,
+        state: &mut RveState,
+        load: &RveLoad,
+    ) -> Result<RveResponse, RveError> {
+        if !load.velocity_gradient.is_finite() {
+            return Err(RveError::InvalidParameter {
+                field: "velocity_gradient",
+                value: load.velocity_gradient.max_abs(),
+                allowed: "finite",
+            });
+        }
+        check_positive("dt", load.dt)?;
+        if load.substeps == 0 {
+            return Err(RveError::InvalidParameter {
+                field: "substeps",
+                value: 0.0,
+                allowed: "[1, 2^32)",
+            });
+        }
+        self.set_temperature(state, load.temperature)?;
+        let h = load.dt / f64::from(load.substeps);
+        let mut heat = 0.0;
+        for _ in 0..load.substeps {
+            heat += self.step(state, &load.velocity_gradient, h)?;
+        }
+        let thickness = self.config.params().thickness;
+        let volume = state.volume(thickness);
+        Ok(RveResponse {
+            stress: measure::stress(state, thickness),
+            heat_source: heat / (volume * load.dt),
+            conductivity: measure::conductivity(state, self.config.params()),
+        })
+    }
+}
+
+#[inline]
+fn sign(v: f64) -> f64 {
+    if v > 0.0 {
+        1.0
+    } else if v < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}

@@ -1,0 +1,170 @@
+//! The crate's error type.
+
+/// Which fluid phase a quantity belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Phase {
+    /// The liquid phase `q` of paper A (water).
+    Liquid,
+    /// The gas phase `p` of paper A (air).
+    Gas,
+}
+
+/// Why a pore closure (A-Eq. 29) failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ClosureFailure {
+    /// A phase mass is negative or not finite.
+    #[error("{phase:?} mass {value:e} kg: must be finite and >= 0")]
+    NegativeMass {
+        /// Which phase.
+        phase: Phase,
+        /// The mass \[kg\].
+        value: f64,
+    },
+    /// The pore volume is zero, negative or not finite.
+    #[error("pore volume {value:e} m³: must be finite and > 0")]
+    NonPositiveVolume {
+        /// The volume \[m³\].
+        value: f64,
+    },
+    /// The temperature is zero, negative or not finite.
+    #[error("temperature {value} K: must be finite and > 0")]
+    NonPositiveTemperature {
+        /// The temperature \[K\].
+        value: f64,
+    },
+    /// The pore holds no mass of either phase: no pressure is defined.
+    #[error("empty pore (no liquid and no gas): pressure undefined")]
+    Empty,
+    /// A failure reported by the fluid model (e.g. an equation of state), in its own words.
+    #[error("fluid model: {message}")]
+    Model {
+        /// The model's message.
+        message: String,
+    },
+    /// No state of the fluid model satisfies the closure (e.g. a pure liquid stretched to a
+    /// pressure below the model's lower limit).
+    #[error("no solution: {reason} (value {value:e})")]
+    NoSolution {
+        /// Why, in words.
+        reason: &'static str,
+        /// The offending value (a pressure in Pa or a density in kg/m³, as `reason` says).
+        value: f64,
+    },
+}
+
+/// Errors of the flow solver. Every variant names the pore, channel or boundary link and,
+/// during a step, the step and sub-step.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FlowError {
+    /// A channel aperture is negative or not finite.
+    #[error("channel {channel}: aperture {value:e} m must be finite and >= 0")]
+    NegativeAperture {
+        /// Channel index.
+        channel: usize,
+        /// The aperture \[m\].
+        value: f64,
+    },
+    /// A channel or boundary link length is zero, negative or not finite.
+    #[error("{what} {index}: length {value:e} m must be finite and > 0")]
+    NonPositiveLength {
+        /// `"channel"` or `"boundary link"`.
+        what: &'static str,
+        /// Its index.
+        index: usize,
+        /// The length \[m\].
+        value: f64,
+    },
+    /// A channel or link refers to a pore that does not exist, or joins a pore to itself.
+    #[error("{what} {index}: pore index {pore} invalid (network has {n_pores} pores)")]
+    BadPoreIndex {
+        /// `"channel"`, `"boundary link"` or `"wall face"`.
+        what: &'static str,
+        /// Its index.
+        index: usize,
+        /// The offending pore index.
+        pore: usize,
+        /// Number of pores.
+        n_pores: usize,
+    },
+    /// A pore volume is zero, negative or not finite (at construction or after a volume
+    /// update `V += dV/dt·Δt`, A-Eq. 25).
+    #[error(
+        "pore {pore}: volume {value:e} m³ must be finite and > 0 (step {step}, sub-step {substep})"
+    )]
+    NonPositiveVolume {
+        /// Pore index.
+        pore: usize,
+        /// The volume \[m³\].
+        value: f64,
+        /// Outer step counter of the state (0 before the first step).
+        step: u64,
+        /// Sub-step within the outer step.
+        substep: u32,
+    },
+    /// The closure (A-Eq. 29) found no state for a pore.
+    #[error("pore {pore}: closure failed at step {step}, sub-step {substep}: {cause}")]
+    Closure {
+        /// Pore index.
+        pore: usize,
+        /// Outer step counter.
+        step: u64,
+        /// Sub-step within the outer step.
+        substep: u32,
+        /// Why.
+        cause: ClosureFailure,
+    },
+    /// A quantity became NaN or infinite.
+    #[error("non-finite {quantity} = {value} at {place} {index} (step {step}, sub-step {substep})")]
+    NonFinite {
+        /// Which quantity (e.g. `"liquid mass rate"`).
+        quantity: &'static str,
+        /// `"pore"`, `"channel"` or `"boundary link"`.
+        place: &'static str,
+        /// Its index.
+        index: usize,
+        /// The value.
+        value: f64,
+        /// Outer step counter.
+        step: u64,
+        /// Sub-step within the outer step.
+        substep: u32,
+    },
+    /// A parameter outside its allowed range.
+    #[error("{name}: must be {range}, got {value}")]
+    OutOfRange {
+        /// Parameter name.
+        name: &'static str,
+        /// Allowed range, in words.
+        range: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// An input array has the wrong length.
+    #[error("{what}: expected {expected} entries, got {got}")]
+    LengthMismatch {
+        /// Which array.
+        what: &'static str,
+        /// Expected length.
+        expected: usize,
+        /// Actual length.
+        got: usize,
+    },
+    /// The explicit update needed more sub-steps than allowed inside one outer step.
+    #[error(
+        "step {step}: {substeps} sub-steps did not cover Δt (stable sub-step {dt_limit:e} s, \
+         limited by {limit} at pore {pore})"
+    )]
+    TooManySubsteps {
+        /// Outer step counter.
+        step: u64,
+        /// Sub-steps taken.
+        substeps: u32,
+        /// The last sub-step limit \[s\].
+        dt_limit: f64,
+        /// `"stability"` or `"liquid positivity"` / `"gas positivity"`.
+        limit: &'static str,
+        /// The pore that set the limit.
+        pore: usize,
+    },
+}

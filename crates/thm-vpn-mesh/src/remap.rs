@@ -1,0 +1,473 @@
+//! Conservative transfer of extensive cell fields from an old mesh to a new one.
+//!
+//! [`RemapOperator::new`] intersects every old triangle with the new triangles it may touch
+//! (a uniform bin grid over the new triangles' bounding boxes, then Sutherland–Hodgman
+//! clipping of one triangle by the three edges of the other) and stores the overlap areas
+//! `A(o ∩ n)` as a sparse old → new matrix. [`RemapOperator::apply`] moves an extensive field
+//! `q` (a phase mass, an energy) with it:
+//!
+//! - the admissible new cells of an old cell `o` are those of the field's [`CellFilter`]
+//!   (fluid fields go only to fluid cells; solid fields to cells of the same sphere);
+//! - `q_o` is split over the admissible cells that overlap `o`, in proportion to the overlap
+//!   areas, normalised by their sum (so the part of `o` now covered by cells of the other kind
+//!   does not lose its content: it is spread over the admissible part of `o`); the last share
+//!   is `q_o` minus the others, so each old cell's content is handed on exactly;
+//! - if no admissible cell overlaps `o` (a pore closed, a crack opened elsewhere), `q_o` goes to
+//!   the admissible new cell nearest to `o`: a breadth-first search over the new mesh's faces
+//!   starts from the cells overlapping `o` (or, if `o` lies outside the new mesh, from the new
+//!   cell with the nearest centroid) and takes, in the first layer that holds admissible cells,
+//!   the one whose centroid is nearest to `o`'s.
+//!
+//! The new total therefore equals the old total up to the rounding of the sums (relative
+//! error of order `n_cells · ε`). Intensive fields (pressure, temperature) are not remapped:
+//! they are recomputed from the remapped masses and energies (A-Sect. 2.4).
+
+use std::collections::VecDeque;
+
+use crate::error::MeshError;
+use crate::mesh::{CellKind, NONE, PoreMesh};
+
+/// Which new cells may receive a field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CellFilter {
+    /// Fluid cells only (phase masses, fluid energy).
+    Fluid,
+    /// Solid cells of the same owner as the old cell (solid energy); falls back to any solid
+    /// cell when the owner has none nearby.
+    SameOwner,
+    /// Any cell.
+    Any,
+}
+
+impl CellFilter {
+    fn name(self) -> &'static str {
+        match self {
+            CellFilter::Fluid => "fluid",
+            CellFilter::SameOwner => "solid",
+            CellFilter::Any => "any",
+        }
+    }
+}
+
+/// The sparse overlap matrix between an old and a new mesh.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RemapOperator {
+    offsets: Vec<u32>,
+    target: Vec<u32>,
+    area: Vec<f64>,
+    old_kind: Vec<CellKind>,
+    old_centroid: Vec<[f64; 2]>,
+    new_kind: Vec<CellKind>,
+    new_centroid: Vec<[f64; 2]>,
+    new_adjacency: Vec<[u32; 3]>,
+}
+
+type Poly = ([[f64; 2]; 9], usize);
+
+fn poly_area(p: &Poly) -> f64 {
+    let (v, n) = p;
+    let mut s = 0.0;
+    for k in 0..*n {
+        let (a, b) = (v[k], v[(k + 1) % *n]);
+        s += a[0] * b[1] - a[1] * b[0];
+    }
+    0.5 * s
+}
+
+/// Area of the intersection of two counter-clockwise triangles.
+pub fn triangle_overlap_area(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3]) -> f64 {
+    let mut cur: Poly = ([[0.0; 2]; 9], 3);
+    cur.0[..3].copy_from_slice(a);
+    let mut next: Poly = ([[0.0; 2]; 9], 0);
+    for k in 0..3 {
+        let (p0, p1) = (b[k], b[(k + 1) % 3]);
+        let e = [p1[0] - p0[0], p1[1] - p0[1]];
+        let side = |x: [f64; 2]| e[0] * (x[1] - p0[1]) - e[1] * (x[0] - p0[0]);
+        next.1 = 0;
+        let n = cur.1;
+        for i in 0..n {
+            let (u, v) = (cur.0[i], cur.0[(i + 1) % n]);
+            let (su, sv) = (side(u), side(v));
+            if su >= 0.0 {
+                next.0[next.1] = u;
+                next.1 += 1;
+            }
+            if (su >= 0.0) != (sv >= 0.0) {
+                let t = su / (su - sv);
+                next.0[next.1] = [u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1])];
+                next.1 += 1;
+            }
+            if next.1 >= 8 {
+                break;
+            }
+        }
+        std::mem::swap(&mut cur, &mut next);
+        if cur.1 < 3 {
+            return 0.0;
+        }
+    }
+    poly_area(&cur).max(0.0)
+}
+
+fn tri_points(m: &PoreMesh, c: usize) -> [[f64; 2]; 3] {
+    m.cell_vertices[c].map(|v| m.vertices[v as usize])
+}
+
+impl RemapOperator {
+    /// Intersects the cells of `old` with the cells of `new`.
+    pub fn new(old: &PoreMesh, new: &PoreMesh) -> Result<Self, MeshError> {
+        for (what, m) in [("old mesh vertex", old), ("new mesh vertex", new)] {
+            for (index, v) in m.vertices.iter().enumerate() {
+                for &value in v {
+                    if !value.is_finite() {
+                        return Err(MeshError::NonFinite { what, index, value });
+                    }
+                }
+            }
+        }
+        let nn = new.n_cells();
+        // Bin grid over the new mesh.
+        let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+        for v in &new.vertices {
+            for k in 0..2 {
+                lo[k] = lo[k].min(v[k]);
+                hi[k] = hi[k].max(v[k]);
+            }
+        }
+        let total_area: f64 = new.cell_area.iter().map(|a| a.abs()).sum();
+        let mut h = if nn > 0 {
+            (total_area / nn as f64).sqrt() * 1.5
+        } else {
+            1.0
+        };
+        if h.is_nan() || h <= 0.0 {
+            h = 1.0;
+        }
+        let span = [(hi[0] - lo[0]).max(0.0), (hi[1] - lo[1]).max(0.0)];
+        // At most about four bins per cell.
+        let min_h = (span[0] * span[1] / (4.0 * nn.max(1) as f64)).sqrt();
+        if min_h.is_finite() && h < min_h {
+            h = min_h;
+        }
+        let nx = ((span[0] / h) as usize + 1).clamp(1, 4096);
+        let ny = ((span[1] / h) as usize + 1).clamp(1, 4096);
+        let hx = (span[0] / nx as f64).max(f64::MIN_POSITIVE);
+        let hy = (span[1] / ny as f64).max(f64::MIN_POSITIVE);
+        let bin_range = |p: &[[f64; 2]; 3]| {
+            let (mut a, mut b) = ([f64::MAX; 2], [f64::MIN; 2]);
+            for q in p {
+                for k in 0..2 {
+                    a[k] = a[k].min(q[k]);
+                    b[k] = b[k].max(q[k]);
+                }
+            }
+            let ix = |x: f64| (((x - lo[0]) / hx).floor().max(0.0) as usize).min(nx - 1);
+            let iy = |y: f64| (((y - lo[1]) / hy).floor().max(0.0) as usize).min(ny - 1);
+            (ix(a[0]), ix(b[0]), iy(a[1]), iy(b[1]), a, b)
+        };
+        let mut start = vec![0u32; nx * ny + 1];
+        for c in 0..nn {
+            let (x0, x1, y0, y1, ..) = bin_range(&tri_points(new, c));
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    start[y * nx + x + 1] += 1;
+                }
+            }
+        }
+        for b in 0..nx * ny {
+            start[b + 1] += start[b];
+        }
+        let mut items = vec![0u32; start[nx * ny] as usize];
+        let mut fill = start.clone();
+        for c in 0..nn {
+            let (x0, x1, y0, y1, ..) = bin_range(&tri_points(new, c));
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let b = y * nx + x;
+                    items[fill[b] as usize] = c as u32;
+                    fill[b] += 1;
+                }
+            }
+        }
+        let mut new_bbox = Vec::with_capacity(nn);
+        for c in 0..nn {
+            let (.., a, b) = bin_range(&tri_points(new, c));
+            new_bbox.push((a, b));
+        }
+        let mut new_adjacency = vec![[NONE; 3]; nn];
+        for (c, faces) in new.cell_faces.iter().enumerate() {
+            for k in 0..3 {
+                let [a, b] = new.face_cells[faces[k] as usize];
+                new_adjacency[c][k] = if a == c as u32 { b } else { a };
+            }
+        }
+        // Old cells: seed with the new cell holding the old centroid, then walk across faces
+        // while the overlap is positive (the new cells meeting a convex old cell form an
+        // edge-connected set). If no new cell holds the centroid, test every binned candidate.
+        let no = old.n_cells();
+        let mut offsets = Vec::with_capacity(no + 1);
+        offsets.push(0u32);
+        let mut target = Vec::with_capacity(no * 6);
+        let mut area = Vec::with_capacity(no * 6);
+        let mut stamp = vec![NONE; nn];
+        let mut stack: Vec<u32> = Vec::with_capacity(64);
+        let contains = |t: &[[f64; 2]; 3], g: [f64; 2]| {
+            (0..3).all(|k| {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                (b[0] - a[0]) * (g[1] - a[1]) - (b[1] - a[1]) * (g[0] - a[0]) >= 0.0
+            })
+        };
+        for o in 0..no {
+            let p = tri_points(old, o);
+            let tag = o as u32;
+            if nn > 0 {
+                let g = [
+                    (p[0][0] + p[1][0] + p[2][0]) / 3.0,
+                    (p[0][1] + p[1][1] + p[2][1]) / 3.0,
+                ];
+                let (gx, _, gy, ..) = bin_range(&[g, g, g]);
+                let bin = gy * nx + gx;
+                let seed = items[start[bin] as usize..start[bin + 1] as usize]
+                    .iter()
+                    .copied()
+                    .find(|&c| contains(&tri_points(new, c as usize), g));
+                match seed {
+                    Some(s) => {
+                        let (.., a, b) = bin_range(&p);
+                        stamp[s as usize] = tag;
+                        stack.push(s);
+                        while let Some(c) = stack.pop() {
+                            let (ca, cb) = new_bbox[c as usize];
+                            if ca[0] >= b[0] || cb[0] <= a[0] || ca[1] >= b[1] || cb[1] <= a[1] {
+                                continue;
+                            }
+                            let ov = triangle_overlap_area(&p, &tri_points(new, c as usize));
+                            if ov > 0.0 {
+                                target.push(c);
+                                area.push(ov);
+                                for &n in &new_adjacency[c as usize] {
+                                    if n != NONE && stamp[n as usize] != tag {
+                                        stamp[n as usize] = tag;
+                                        stack.push(n);
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    None => {
+                        let (x0, x1, y0, y1, a, b) = bin_range(&p);
+                        for y in y0..=y1 {
+                            for x in x0..=x1 {
+                                let bin = y * nx + x;
+                                for &c in &items[start[bin] as usize..start[bin + 1] as usize] {
+                                    if stamp[c as usize] == tag {
+                                        continue;
+                                    }
+                                    stamp[c as usize] = tag;
+                                    let (ca, cb) = new_bbox[c as usize];
+                                    if ca[0] > b[0] || cb[0] < a[0] || ca[1] > b[1] || cb[1] < a[1]
+                                    {
+                                        continue;
+                                    }
+                                    let ov =
+                                        triangle_overlap_area(&p, &tri_points(new, c as usize));
+                                    if ov > 0.0 {
+                                        target.push(c);
+                                        area.push(ov);
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            offsets.push(target.len() as u32);
+        }
+        Ok(Self {
+            offsets,
+            target,
+            area,
+            old_kind: old.cell_kind.clone(),
+            old_centroid: old.cell_centroid.clone(),
+            new_kind: new.cell_kind.clone(),
+            new_centroid: new.cell_centroid.clone(),
+            new_adjacency,
+        })
+    }
+
+    /// Overlaps of old cell `o`: `(new cell, area)` pairs.
+    pub fn overlaps(&self, o: usize) -> impl Iterator<Item = (u32, f64)> + '_ {
+        let (a, b) = (self.offsets[o] as usize, self.offsets[o + 1] as usize);
+        self.target[a..b]
+            .iter()
+            .copied()
+            .zip(self.area[a..b].iter().copied())
+    }
+
+    fn admissible(&self, filter: CellFilter, old: CellKind, new: CellKind, strict: bool) -> bool {
+        match filter {
+            CellFilter::Any => true,
+            CellFilter::Fluid => new.is_fluid(),
+            CellFilter::SameOwner => match (old, new) {
+                (CellKind::Solid { owner: a }, CellKind::Solid { owner: b }) => !strict || a == b,
+                (CellKind::Fluid, CellKind::Solid { .. }) => true,
+                _ => false,
+            },
+        }
+    }
+
+    /// Breadth-first search from `seeds` for the nearest admissible cell.
+    fn nearest(
+        &self,
+        seeds: &[u32],
+        ok: impl Fn(u32) -> bool,
+        from: [f64; 2],
+        seen: &mut [u32],
+        tag: u32,
+    ) -> u32 {
+        let mut layer: VecDeque<u32> = VecDeque::new();
+        for &s in seeds {
+            if seen[s as usize] != tag {
+                seen[s as usize] = tag;
+                layer.push_back(s);
+            }
+        }
+        while !layer.is_empty() {
+            let mut best = (f64::MAX, NONE);
+            for &c in &layer {
+                if ok(c) {
+                    let g = self.new_centroid[c as usize];
+                    let d = (g[0] - from[0]).powi(2) + (g[1] - from[1]).powi(2);
+                    if d < best.0 || (d == best.0 && c < best.1) {
+                        best = (d, c);
+                    }
+                }
+            }
+            if best.1 != NONE {
+                return best.1;
+            }
+            let mut next = VecDeque::new();
+            for &c in &layer {
+                for &n in &self.new_adjacency[c as usize] {
+                    if n != NONE && seen[n as usize] != tag {
+                        seen[n as usize] = tag;
+                        next.push_back(n);
+                    }
+                }
+            }
+            layer = next;
+        }
+        NONE
+    }
+
+    /// Transfers the extensive field `old_values` (one value per old cell) to `new_values`
+    /// (overwritten, one per new cell); only new cells admitted by `filter` receive content.
+    pub fn apply(
+        &self,
+        filter: CellFilter,
+        old_values: &[f64],
+        new_values: &mut [f64],
+    ) -> Result<(), MeshError> {
+        let (no, nn) = (self.old_kind.len(), self.new_kind.len());
+        if old_values.len() != no {
+            return Err(MeshError::LengthMismatch {
+                what: "old_values",
+                expected: no,
+                got: old_values.len(),
+            });
+        }
+        if new_values.len() != nn {
+            return Err(MeshError::LengthMismatch {
+                what: "new_values",
+                expected: nn,
+                got: new_values.len(),
+            });
+        }
+        for (index, &value) in old_values.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(MeshError::NonFinite {
+                    what: "old_values",
+                    index,
+                    value,
+                });
+            }
+        }
+        new_values.fill(0.0);
+        let mut seen = vec![NONE; nn];
+        let mut searches = 0u32;
+        for (o, &q) in old_values.iter().enumerate() {
+            if q == 0.0 {
+                continue;
+            }
+            let ok_kind = self.old_kind[o];
+            let mut placed = false;
+            for strict in [true, false] {
+                let sum: f64 = self
+                    .overlaps(o)
+                    .filter(|&(c, _)| {
+                        self.admissible(filter, ok_kind, self.new_kind[c as usize], strict)
+                    })
+                    .map(|(_, a)| a)
+                    .sum();
+                if sum > 0.0 {
+                    let mut given = 0.0;
+                    let mut last = NONE;
+                    let mut last_area = 0.0;
+                    for (c, a) in self.overlaps(o) {
+                        if self.admissible(filter, ok_kind, self.new_kind[c as usize], strict) {
+                            if last != NONE {
+                                let share = q * (last_area / sum);
+                                new_values[last as usize] += share;
+                                given += share;
+                            }
+                            last = c;
+                            last_area = a;
+                        }
+                    }
+                    new_values[last as usize] += q - given;
+                    placed = true;
+                    break;
+                }
+            }
+            if placed {
+                continue;
+            }
+            // No admissible overlap: nearest admissible cell.
+            let mut seeds: Vec<u32> = self.overlaps(o).map(|(c, _)| c).collect();
+            let from = self.old_centroid[o];
+            if seeds.is_empty() && nn > 0 {
+                let mut best = (f64::MAX, 0u32);
+                for (c, g) in self.new_centroid.iter().enumerate() {
+                    let d = (g[0] - from[0]).powi(2) + (g[1] - from[1]).powi(2);
+                    if d < best.0 {
+                        best = (d, c as u32);
+                    }
+                }
+                seeds.push(best.1);
+            }
+            let mut cell = NONE;
+            for strict in [true, false] {
+                searches += 1;
+                cell = self.nearest(
+                    &seeds,
+                    |c| self.admissible(filter, ok_kind, self.new_kind[c as usize], strict),
+                    from,
+                    &mut seen,
+                    searches,
+                );
+                if cell != NONE {
+                    break;
+                }
+            }
+            if cell == NONE {
+                return Err(MeshError::NoTargetCell {
+                    cell: o,
+                    value: q,
+                    filter: filter.name(),
+                });
+            }
+            new_values[cell as usize] += q;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,133 @@
+//! Mesher: area identities, convergence, degenerate input.
+
+use thm_vpn_mesh::*;
+
+fn circle(x: f64, y: f64, r: f64, owner: u32) -> Circle {
+    Circle {
+        centre: [x, y],
+        radius: r,
+        owner,
+    }
+}
+
+fn box_params(min: [f64; 2], max: [f64; 2], n: u32) -> MeshSettings {
+    MeshParams::new(Outline::Box { min, max }, n)
+        .validate()
+        .unwrap()
+}
+
+/// Area of the part of a disc of radius `r` beyond a line at distance `a` from its centre.
+fn segment_area(r: f64, a: f64) -> f64 {
+    let a = a.clamp(-r, r);
+    r * r * (a / r).acos() - a * (r * r - a * a).sqrt()
+}
+
+#[test]
+fn two_overlapping_circles_in_a_box() {
+    let cs = [circle(0.4, 0.5, 0.2, 7), circle(0.65, 0.5, 0.1, 9)];
+    let ct = [Contact {
+        circles: [0, 1],
+        normal_stress: 1e6,
+    }];
+    let pm = mesh_packing(&cs, &ct, &box_params([0.0, 0.0], [1.0, 1.0], 64)).unwrap();
+    let m = &pm.mesh;
+    let total = m.fluid_area() + m.solid_area();
+    assert!((total - 1.0).abs() < 1e-13, "{total}");
+    assert_eq!(pm.chords.circles.len(), 1);
+    assert_ne!(pm.chords.face[0], NONE);
+    assert_ne!(pm.contact_channel[0], NONE);
+    println!("{:?} cells {}", pm.chords, m.n_cells());
+    for (i, c) in cs.iter().enumerate() {
+        let o = &cs[1 - i];
+        let d = ((c.centre[0] - o.centre[0]).powi(2) + (c.centre[1] - o.centre[1]).powi(2)).sqrt();
+        let a = (d * d + c.radius * c.radius - o.radius * o.radius) / (2.0 * d);
+        let exact = std::f64::consts::PI * c.radius * c.radius - segment_area(c.radius, a);
+        let got = pm.circle_solid_area(i);
+        println!(
+            "circle {i}: {got} vs {exact}: rel {}",
+            (got - exact) / exact
+        );
+        assert!(((got - exact) / exact).abs() < 5e-3);
+    }
+}
+
+/// Convergence table on the paper's bar: the meshed solid area against the exact area of the
+/// union of the discs, and the worst circle against its exact cut area; doubling the boundary
+/// resolution divides both errors by ≈ 4 (second order). Run with `--nocapture` for the table.
+#[test]
+fn bar_solid_area_converges_at_second_order() {
+    use thm_vpn_mesh::packing::{
+        PackingSpec, cut_circle_area, overlap_contacts, random_packing, union_area,
+    };
+    let spec = PackingSpec::paper_bar(1);
+    let cs = random_packing(&spec);
+    let ct = overlap_contacts(&cs, 1e7);
+    let u = union_area(&cs);
+    let mut prev: Option<(f64, f64)> = None;
+    println!(
+        "segments | cells | solid-area rel. error | ratio | worst cut circle rel. error | ratio"
+    );
+    for n in [16u32, 32, 64, 128] {
+        let pm = mesh_packing(&cs, &ct, &box_params(spec.box_min, spec.box_max, n)).unwrap();
+        let e_u = (pm.mesh.solid_area() - u).abs() / u;
+        let e_c = (0..cs.len())
+            .filter_map(|i| {
+                cut_circle_area(&cs, i).map(|a| (pm.circle_solid_area(i) - a).abs() / a)
+            })
+            .fold(0.0, f64::max);
+        let (ru, rc) = prev.map_or((f64::NAN, f64::NAN), |(pu, pc)| (pu / e_u, pc / e_c));
+        println!(
+            "{n:8} | {:5} | {e_u:.3e} | {ru:.2} | {e_c:.3e} | {rc:.2}",
+            pm.mesh.n_cells()
+        );
+        if prev.is_some() {
+            assert!(ru > 3.5 && ru < 4.5, "union error ratio {ru}");
+            assert!(rc > 3.5 && rc < 4.5, "circle error ratio {rc}");
+        }
+        prev = Some((e_u, e_c));
+    }
+}
+
+#[test]
+fn verification_cases_pass() {
+    for case in thm_vpn_mesh::verification::cases() {
+        let out = (case.run)().unwrap();
+        for r in &out.rows {
+            println!(
+                "{:60} {:.6e} vs {:.6e} err {:.2e} tol {:.2e} {}",
+                r.quantity, r.measured, r.reference, r.error, r.tolerance, r.pass
+            );
+        }
+        for n in &out.notes {
+            println!("note: {n}");
+        }
+        assert!(out.passed(), "{}", case.name);
+    }
+}
+
+/// The exported arrays describe the same mesh, and the interface and contact faces are the
+/// faces between a fluid and a solid cell and between two spheres.
+#[test]
+fn export_arrays_and_face_sets() {
+    let cs = [circle(0.4, 0.5, 0.2, 7), circle(0.65, 0.5, 0.1, 9)];
+    let pm = mesh_packing(&cs, &[], &box_params([0.0, 0.0], [1.0, 1.0], 32)).unwrap();
+    let m = &pm.mesh;
+    let tris = m.triangles_usize();
+    let types = m.cell_type_labels();
+    let owners = m.cell_owner_labels();
+    assert_eq!(tris.len(), m.n_cells());
+    for c in 0..m.n_cells() {
+        assert_eq!(types[c] == 0, m.cell_kind[c].is_fluid());
+        assert_eq!(owners[c] == -1, m.cell_kind[c].is_fluid());
+        assert!(owners[c] == -1 || owners[c] == 7 || owners[c] == 9);
+    }
+    // The contact faces form the cut: their total length is the chord length.
+    let chord: f64 = m.contact_faces().map(|f| m.face_length[f]).sum();
+    let d = 0.25f64;
+    let a = (d * d + 0.04 - 0.01) / (2.0 * d);
+    let exact = 2.0 * (0.04 - a * a).sqrt();
+    assert!((chord - exact).abs() < 1e-14, "{chord} vs {exact}");
+    // Interface faces: the polygon outlines minus the cut, a closed loop around the pair.
+    let perimeter: f64 = m.fluid_solid_faces().map(|f| m.face_length[f]).sum();
+    assert!(perimeter > 0.0 && perimeter < std::f64::consts::TAU * 0.3);
+}
