@@ -88,6 +88,11 @@ fn fmt_tol(r: &Row) -> String {
     }
 }
 
+/// A Markdown table cell: pipes escaped, on one line.
+fn md_cell(s: &str) -> String {
+    s.replace('|', "\\|").replace('\n', " ")
+}
+
 fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n']) {
         format!("\"{}\"", s.replace('"', "\"\""))
@@ -158,7 +163,8 @@ fn report_md(
         let _ = writeln!(md, "| {} |", header[1..].join(" | "));
         let _ = writeln!(md, "|{}", "---|".repeat(header.len() - 1));
         for row in table.iter().filter(|r| r[0] == o.case.name) {
-            let _ = writeln!(md, "| {} |", row[1..].join(" | ").replace('\n', " "));
+            let cells: Vec<String> = row[1..].iter().map(|c| md_cell(c)).collect();
+            let _ = writeln!(md, "| {} |", cells.join(" | "));
         }
         md.push('\n');
         for p in written {
@@ -312,7 +318,8 @@ pub fn run(opts: &Options) -> ExitCode {
     let _ = writeln!(md, "| {} |", header.join(" | "));
     let _ = writeln!(md, "|{}", "---|".repeat(header.len()));
     for row in &table {
-        let _ = writeln!(md, "| {} |", row.join(" | ").replace('\n', " "));
+        let cells: Vec<String> = row.iter().map(|c| md_cell(c)).collect();
+        let _ = writeln!(md, "| {} |", cells.join(" | "));
     }
     md.push_str("\n## Cases\n\n");
     for o in &outcomes {
@@ -446,6 +453,7 @@ mod tests {
         );
         assert!(md.contains("![y = 2x](demo/case/line.png)"), "{md}");
         assert!(md.contains("| y(1) | m | 2.1 |"), "{md}");
+        assert_eq!(md_cell("max |T| a\nb"), "max \\|T\\| a b");
         std::fs::remove_dir_all(&out).unwrap();
     }
 }

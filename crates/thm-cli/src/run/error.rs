@@ -80,6 +80,17 @@ pub enum RunError {
         /// What differs.
         detail: String,
     },
+    /// The physics refused to step (its own typed error, e.g. a time step above the stability
+    /// limit or a point leaving the grid).
+    #[error("step {step} (t = {time} s): {message}")]
+    Physics {
+        /// The step that failed.
+        step: u64,
+        /// The simulated time at its start \[s\].
+        time: f64,
+        /// The physics crate's error message.
+        message: String,
+    },
     /// The simulation went unstable: a non-finite or impossible value.
     #[error("unstable at step {step} (t = {time} s): {quantity} = {value} at {place}")]
     Unstable {

@@ -148,10 +148,7 @@ pub fn write_summary<S: Scenario>(
     let summary = scenario.summary(state, t_end);
     if !summary.is_empty() {
         let _ = writeln!(md, "## Figures at t = {} s\n", fmt(t_end));
-        let _ = writeln!(
-            md,
-            "| quantity | unit | measured | reference | relative error |"
-        );
+        let _ = writeln!(md, "| quantity | unit | measured | reference | error |");
         let _ = writeln!(md, "|---|---|---|---|---|");
         for r in &summary {
             let (reference, err) = match r.reference {

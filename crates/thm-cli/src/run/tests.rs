@@ -78,7 +78,11 @@ fn assert_same_results(a: &Path, b: &Path, series: &str, frames: &[u64], n: u64)
         format!("{series}.pvd"),
         "scenario.toml".to_string(),
     ];
-    files.extend(frames.iter().map(|f| format!("{series}/{series}_{f:08}.vtu")));
+    files.extend(
+        frames
+            .iter()
+            .map(|f| format!("{series}/{series}_{f:08}.vtu")),
+    );
     for rel in files {
         assert!(read(&a.join(&rel)) == read(&b.join(&rel)), "{rel} differs");
     }
@@ -447,5 +451,71 @@ mod unstable {
         assert_eq!(kept, 1e200);
         assert!(!checkpoint_path(&out, 4).exists());
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+/// The MPM bar of B-Sect. 5.1.1, short and coarse: a checkpoint written mid-run and resumed
+/// gives the same bits as the run that was not interrupted.
+mod mpm_bar {
+    use super::*;
+
+    const BAR: &str = r#"
+kind = "mpm_semi_infinite_bar"
+
+[time]
+step = "0.1 ms"
+end = "0.2 s"
+
+[output]
+history_every = 50
+frame_every = 500
+checkpoint_every = 700
+encoding = "raw"
+
+[bar]
+cells = 60
+probe = "1 m"
+"#;
+
+    #[test]
+    fn resumed_mid_run_is_bitwise_identical() {
+        let dir = scratch("mpm_bar");
+        let file = write_scenario(&dir, BAR);
+        let full = dir.join("full");
+        let Outcome::Finished { steps, .. } = run(&file, &full, None).unwrap() else {
+            panic!("not finished")
+        };
+        assert_eq!(steps, 2000);
+        let resumed = dir.join("resumed");
+        copy_dir(&full, &resumed);
+        std::fs::remove_file(checkpoint_path(&resumed, 2000)).unwrap();
+        std::fs::remove_file(resumed.join("material_points/material_points_00002000.vtu")).unwrap();
+        run(&file, &resumed, Some(&checkpoint_path(&resumed, 1400))).unwrap();
+        assert_same_results(&full, &resumed, "material_points", &[1500, 2000], 2000);
+        // Interrupted at the first step and resumed: the same bits again.
+        let cut = dir.join("cut");
+        let outcome = run_file(&file, &cut, None, &AtomicBool::new(true), Progress::Quiet).unwrap();
+        let Outcome::Interrupted { checkpoint, .. } = outcome else {
+            panic!("not interrupted")
+        };
+        run(&file, &cut, Some(&checkpoint)).unwrap();
+        assert_same_results(&full, &cut, "material_points", &[1500, 2000], 2000);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_time_step_above_the_stability_limit_names_the_key() {
+        let text = BAR.replace("step = \"0.1 ms\"", "step = \"1 s\"");
+        let err = error_of("mpm_bar_dt", &text);
+        assert!(err.contains("time.step: must be ≤"), "{err}");
+        let text = BAR.replace("probe = \"1 m\"", "probe = \"7 m\"");
+        let err = error_of("mpm_bar_probe", &text);
+        assert!(err.contains("bar.probe: must be in"), "{err}");
+        let text = BAR.replace("cells = 60", "cells = 1");
+        let err = error_of("mpm_bar_cells", &text);
+        assert!(
+            err.contains("bar.cells: must be in [2, 100000], got 1"),
+            "{err}"
+        );
     }
 }

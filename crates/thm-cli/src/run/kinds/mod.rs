@@ -1,6 +1,7 @@
 //! The scenario kinds `thm run` knows, dispatched on the file's `kind` key.
 
 pub mod lumped_cooling;
+pub mod mpm_semi_infinite_bar;
 
 use std::path::Path;
 
@@ -10,11 +11,14 @@ use super::scenario::{DriveOptions, Outcome, Scenario, drive};
 
 /// The `kind` tags, for error messages.
 pub fn names() -> String {
-    [lumped_cooling::LumpedCooling::KIND]
-        .iter()
-        .map(|k| format!("`{k}`"))
-        .collect::<Vec<_>>()
-        .join(", ")
+    [
+        lumped_cooling::LumpedCooling::KIND,
+        mpm_semi_infinite_bar::SemiInfiniteBar::KIND,
+    ]
+    .iter()
+    .map(|k| format!("`{k}`"))
+    .collect::<Vec<_>>()
+    .join(", ")
 }
 
 /// Runs the document with the driver of its kind.
@@ -26,6 +30,9 @@ pub fn dispatch(
     match doc.common.kind.as_str() {
         lumped_cooling::LumpedCooling::KIND => {
             drive::<lumped_cooling::LumpedCooling>(doc, file, opts)
+        }
+        mpm_semi_infinite_bar::SemiInfiniteBar::KIND => {
+            drive::<mpm_semi_infinite_bar::SemiInfiniteBar>(doc, file, opts)
         }
         other => Err(RunError::Config {
             path: file.to_path_buf(),
