@@ -385,6 +385,34 @@ mod tests {
     use thm_verify::{Series, SeriesRole};
 
     #[test]
+    fn case_names_are_unique_and_prefixed_by_their_crate() {
+        let cases = all_cases();
+        let mut names: Vec<&str> = cases.iter().map(|c| c.name).collect();
+        for n in &names {
+            let (prefix, rest) = n
+                .split_once('/')
+                .unwrap_or_else(|| panic!("case `{n}` must be named `crate/short_name`"));
+            assert!(!prefix.is_empty() && !rest.is_empty(), "case `{n}`");
+        }
+        names.sort_unstable();
+        let before = names.len();
+        names.dedup();
+        assert_eq!(before, names.len(), "duplicate case names");
+    }
+
+    #[test]
+    fn options_parse_and_select() {
+        let args: Vec<String> = ["--quick", "--case", "eos/"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        let o = Options::parse(&args).unwrap();
+        assert!(o.quick && o.filters == ["eos/"]);
+        assert!(Options::parse(&["--bogus".to_string()]).is_err());
+        assert!(Options::parse(&["--case".to_string()]).is_err());
+    }
+
+    #[test]
     fn a_case_plot_is_written_as_non_empty_png_and_csv_and_linked_from_the_report() {
         let out = std::env::temp_dir().join(format!("xtask-verify-plot-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&out);

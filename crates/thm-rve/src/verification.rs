@@ -27,25 +27,25 @@ use thm_verify::{Case, CaseError, CaseOutput, Row};
 pub fn cases() -> Vec<Case> {
     vec![
         Case {
-            name: "rve_isotropic_consolidation",
+            name: "rve/isotropic_consolidation",
             description: "400 disks, radii [0.25, 0.5] mm, k_n = k_t = 1e6 N/m, servo to 100 kPa (B-Sect. 5.2.2)",
             quick: true,
             run: consolidation_case,
         },
         Case {
-            name: "rve_uniaxial_compression_moduli",
+            name: "rve/uniaxial_compression_moduli",
             description: "E and ν of the consolidated packing from constrained compression, 5 seeds (B-Sect. 5.2.2: 12 MPa, 0.18)",
             quick: false,
             run: moduli_case,
         },
         Case {
-            name: "rve_dense_loose_void_ratio",
+            name: "rve/dense_loose_void_ratio",
             description: "void ratio after consolidation with μ = 0.01 (dense) and 0.5 (loose) (B-Sect. 5.3.1: 0.165, 0.236)",
             quick: false,
             run: void_ratio_case,
         },
         Case {
-            name: "rve_friction_heat_balance",
+            name: "rve/friction_heat_balance",
             description: "heat returned (B-Eq. 33) = sliding work (B-Eq. 32); cell energy balance without damping",
             quick: true,
             run: heat_balance_case,
