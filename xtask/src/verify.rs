@@ -187,6 +187,22 @@ pub fn workspace_target() -> PathBuf {
     crate::tidy::workspace_root().join("target")
 }
 
+/// Where a worker leaves a case's result and its wall time.
+type Slot = std::sync::Mutex<Option<(Result<CaseOutput, String>, f64)>>;
+
+fn run_case(case: &Case) -> Result<CaseOutput, String> {
+    std::panic::catch_unwind(case.run)
+        .map_err(|p| {
+            let msg = p
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default();
+            format!("panicked: {msg}")
+        })
+        .and_then(|r| r.map_err(|e| e.to_string()))
+}
+
 pub fn run(opts: &Options) -> ExitCode {
     let cases: Vec<Case> = all_cases()
         .into_iter()
@@ -212,24 +228,42 @@ pub fn run(opts: &Options) -> ExitCode {
         .clone()
         .unwrap_or_else(|| workspace_target().join("verify"));
 
+    // Cases are independent: run them on as many workers as the machine has cores, longest
+    // first is not known in advance, so workers take the next case from a shared index. The
+    // report keeps the registration order whatever the finishing order.
+    let workers = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1)
+        .min(cases.len());
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let slots: Vec<Slot> = cases.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(case) = cases.get(i) else { break };
+                    eprintln!("verify: running {} ...", case.name);
+                    let t0 = Instant::now();
+                    let result = run_case(case);
+                    if let Ok(mut slot) = slots[i].lock() {
+                        *slot = Some((result, t0.elapsed().as_secs_f64()));
+                    }
+                }
+            });
+        }
+    });
     let mut outcomes = Vec::new();
-    for case in cases {
-        eprintln!("verify: running {} ...", case.name);
-        let t0 = Instant::now();
-        let result = std::panic::catch_unwind(case.run)
-            .map_err(|p| {
-                let msg = p
-                    .downcast_ref::<String>()
-                    .cloned()
-                    .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
-                    .unwrap_or_default();
-                format!("panicked: {msg}")
-            })
-            .and_then(|r| r.map_err(|e| e.to_string()));
+    for (case, slot) in cases.into_iter().zip(slots) {
+        let (result, seconds) = slot
+            .into_inner()
+            .ok()
+            .flatten()
+            .unwrap_or_else(|| (Err("case did not report".to_string()), 0.0));
         outcomes.push(Outcome {
             case,
             result,
-            seconds: t0.elapsed().as_secs_f64(),
+            seconds,
         });
     }
 
