@@ -5,10 +5,8 @@
 //! Run: `cargo run --release -p thm-benchmarks --example mpm_rate -- [steps]`
 
 use std::time::Instant;
-use thm_mpm::{
-    Constitutive, DruckerPrager, DruckerPragerParameters, GridParameters, MaterialPoints, Mpm,
-    MpmConfig, MpmParameters, MpmState, PointProperties, RigidWall, StresslessConductor,
-};
+use thm_benchmarks::mpm_column::column;
+use thm_mpm::{Constitutive, DruckerPrager, DruckerPragerParameters, StresslessConductor};
 
 fn cpu_seconds() -> f64 {
     let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
@@ -17,52 +15,6 @@ fn cpu_seconds() -> f64 {
     let ticks = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
     // Fields 14 (utime) and 15 (stime), counted from 1; `rest` starts at field 3.
     (ticks(11) + ticks(12)) / 100.0
-}
-
-fn column<M: Constitutive>(side: usize, material: &M) -> (Mpm, MpmState<M::PointState>) {
-    let h = 0.01;
-    let mut params = MpmParameters::on_grid(GridParameters {
-        origin: [0.0, 0.0],
-        cell_size: h,
-        cells: [4 * side + 2, side + 4],
-    });
-    params.gravity = [0.0, -9.81];
-    params.pic_fraction = 0.05;
-    params.walls = vec![
-        RigidWall {
-            point: [0.0, h],
-            normal: [0.0, 1.0],
-            velocity: [0.0; 2],
-            friction: 0.5,
-            removal_time: None,
-        },
-        RigidWall {
-            point: [h, 0.0],
-            normal: [1.0, 0.0],
-            velocity: [0.0; 2],
-            friction: 0.0,
-            removal_time: None,
-        },
-    ];
-    let config = MpmConfig::new(params).expect("valid");
-    let mut points = MaterialPoints::new();
-    points
-        .fill_rectangle(
-            config.grid(),
-            [h, h],
-            [h * (side + 1) as f64, h * (side + 1) as f64],
-            2,
-            &PointProperties {
-                density: 1500.0,
-                specific_heat: 800.0,
-                conductivity: [1.0, 1.0, 0.0],
-                temperature: 20.0,
-                velocity: [0.0; 2],
-            },
-        )
-        .expect("valid");
-    let state = MpmState::new(points, material);
-    (Mpm::new(config), state)
 }
 
 fn run<M: Constitutive>(name: &str, material: &M, side: usize, threads: usize, steps: usize) {
