@@ -125,46 +125,40 @@ fn parameter(
     }
 }
 
+/// Checks that an input state variable is finite and positive.
+#[inline]
+fn check_positive_input(
+    quantity: &'static str,
+    allowed: &'static str,
+    value: f64,
+) -> Result<f64, EosError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(EosError::InvalidInput {
+            quantity,
+            value,
+            allowed,
+        })
+    }
+}
+
 /// Checks a temperature (K): finite and positive.
 #[inline]
 pub(crate) fn check_temperature(temperature: f64) -> Result<f64, EosError> {
-    if temperature.is_finite() && temperature > 0.0 {
-        Ok(temperature)
-    } else {
-        Err(EosError::InvalidInput {
-            quantity: "temperature",
-            value: temperature,
-            allowed: "(0, inf) K",
-        })
-    }
+    check_positive_input("temperature", "(0, inf) K", temperature)
 }
 
 /// Checks a density (kg/m³): finite and positive.
 #[inline]
 pub(crate) fn check_density(density: f64) -> Result<f64, EosError> {
-    if density.is_finite() && density > 0.0 {
-        Ok(density)
-    } else {
-        Err(EosError::InvalidInput {
-            quantity: "density",
-            value: density,
-            allowed: "(0, inf) kg/m³",
-        })
-    }
+    check_positive_input("density", "(0, inf) kg/m³", density)
 }
 
 /// Checks a pressure (Pa): finite and positive.
 #[inline]
 pub(crate) fn check_pressure(pressure: f64) -> Result<f64, EosError> {
-    if pressure.is_finite() && pressure > 0.0 {
-        Ok(pressure)
-    } else {
-        Err(EosError::InvalidInput {
-            quantity: "pressure",
-            value: pressure,
-            allowed: "(0, inf) Pa",
-        })
-    }
+    check_positive_input("pressure", "(0, inf) Pa", pressure)
 }
 
 impl PengRobinson {
