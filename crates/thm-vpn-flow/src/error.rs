@@ -65,6 +65,14 @@ pub enum FlowError {
         /// The aperture \[m\].
         value: f64,
     },
+    /// A boundary link aperture is negative or not finite.
+    #[error("boundary link {link}: aperture {value:e} m must be finite and >= 0")]
+    NegativeLinkAperture {
+        /// Boundary link index.
+        link: usize,
+        /// The aperture \[m\].
+        value: f64,
+    },
     /// A channel or boundary link length is zero, negative or not finite.
     #[error("{what} {index}: length {value:e} m must be finite and > 0")]
     NonPositiveLength {

@@ -256,11 +256,7 @@ impl Network {
             }
             let h = parts.link_aperture[k];
             if !(h.is_finite() && h >= 0.0) {
-                return Err(FlowError::OutOfRange {
-                    name: "link_aperture",
-                    range: "finite and >= 0 m",
-                    value: h,
-                });
+                return Err(FlowError::NegativeLinkAperture { link: k, value: h });
             }
             for (what, v) in [
                 ("boundary link", parts.link_length[k]),

@@ -325,7 +325,28 @@ fn bad_input_is_a_typed_error_naming_the_place() {
         FlowError::NonPositiveLength { index: 0, .. }
     ));
     parts.channel_length[0] = 1e-3;
-    let net = Network::new(parts).unwrap();
+    let mut with_links = parts.clone();
+    with_links.boundaries = vec![BoundaryCondition::Impermeable];
+    with_links.link_pore = vec![0, 1];
+    with_links.link_group = vec![0, 0];
+    with_links.link_length = vec![1e-3; 2];
+    with_links.link_aperture = vec![1e-6, -2e-6];
+    with_links.link_face_length = vec![1e-3; 2];
+    assert_eq!(
+        Network::new(with_links).unwrap_err(),
+        FlowError::NegativeLinkAperture {
+            link: 1,
+            value: -2e-6
+        }
+    );
+    let mut net = Network::new(parts).unwrap();
+    // Apertures replaced later (e.g. S2S apertures from contact stresses) are checked too.
+    let e = net.set_channel_apertures(&[1e-6, f64::NAN]).unwrap_err();
+    assert!(
+        matches!(e, FlowError::NegativeAperture { channel: 1, .. }),
+        "{e}"
+    );
+    assert_eq!(net.parts().channel_aperture, [1e-6, 1e-6]);
     let fluid = water_air();
     let e = FlowState::from_masses(
         &net,
