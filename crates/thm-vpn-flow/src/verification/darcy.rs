@@ -16,18 +16,21 @@
 //! verification run: its stable sub-step is set by the smallest pores (≈ 4·10⁻⁸ s) while the
 //! slowest pressure mode of the saturated bar relaxes in `L²/(π² D)` with
 //! `D = κ K/(μ φ)` (≈ 0.3 s), some 10⁷ sub-steps. The steady state is therefore solved
-//! directly (dense Cholesky on the pores connected to a boundary; pores in clusters that no
-//! boundary reaches carry no flow):
+//! directly (Cholesky factorisation within the envelope of a breadth-first ordering of the
+//! pores connected to a boundary; pores in clusters that no boundary reaches carry no flow):
 //!
 //! - *incompressible*: `Σ_c C_c (P_j − P_i) = 0` with `C_c = w h³/(12 μ L)` (A-Eq. 10), which
 //!   is what A-Eq. 56 assumes (the same volumetric rate through both edges); κ is taken from it;
 //! - *the stepper's own steady state*: the mass balance with the stepper's upwind densities
 //!   `Σ_c ρ_up,c C_c (P_j − P_i) = 0` (water entering from a reservoir has its density),
-//!   solved by Picard iteration on the densities. Started there, the stepper must stay there:
-//!   its pore mass rates vanish to round-off and the mass rates through the two edges balance.
+//!   solved by Picard iteration on the densities. Started there, the stepper must stay there
+//!   (pressures unchanged to round-off, the mass rates through the two edges balanced).
 //!
-//! That the explicit transient converges to the direct solution is checked on a smaller,
-//! more uniform network (`vpn_flow/darcy_transient_structured_bar`).
+//! On this mesh the transient is checked near the steady state: a ±1 % perturbation of the
+//! steady pressures must shrink at every sub-step in the norm `Σ (V/K)_i (P_i − P_s,i)²`
+//! (forward Euler within the stability bound contracts the linearised pressure equation in
+//! that norm). That the explicit transient runs all the way to the direct solution is checked
+//! on a smaller, more uniform network (`vpn_flow/darcy_transient_structured_bar`).
 //!
 //! **γ.** All T2T and boundary-link apertures are proportional to γ (A-Eq. 9), the S2S ones
 //! are not. When T2T channels limit the flow `κ ∝ γ³`; the S2S channels (which must be
@@ -35,9 +38,11 @@
 //! so the γ giving the paper's κ is found by regula falsi (Illinois) on `ln κ(ln γ)`.
 //!
 //! **Reference and tolerance.** The paper's κ belongs to its own random packing. Packings of
-//! the same statistics differ: κ is computed for several seeds, and the paper's value must lie
-//! within their range (a packing without a pore path from bottom to top has κ = 0 and is
-//! counted apart).
+//! the same statistics differ: κ is computed for 12 seeds; the median of `log10 κ` over those
+//! with a pore path from bottom to top must lie within two robust standard deviations
+//! (1.4826 × median absolute deviation, insensitive to a packing whose only path crosses a
+//! nearly closed channel) of the paper's `log10 κ`. The γ that gives the paper's κ is reported
+//! for packing 1 (a row) and for every packing within that band (notes, with their median).
 
 use super::{TEMPERATURE, WATER_VISCOSITY, err, water_air};
 use crate::{
