@@ -6,7 +6,7 @@
 //! 2. `vpn_flow/darcy_permeability`: the permeability test of A-Sect. 3.2 (A-Eq. 56) on the
 //!    paper's bar mesh (a 20 × 80 mm packing meshed by `thm-vpn-mesh`; 0.1 MPa top, 5 MPa
 //!    bottom, impermeable sides, water): κ at the paper's γ, the γ that gives the paper's κ,
-//!    the steady state of the stepper (see [`darcy`]).
+//!    the steady state of the stepper (module `darcy`).
 //! 3. `vpn_flow/darcy_transient_structured_bar`: on a jittered structured triangulation of the
 //!    bar, the explicit transient runs to steady state and matches the direct steady solve.
 //! 4. `vpn_flow/two_phase_drainage_column`: gas displacing water from a column; both phase
