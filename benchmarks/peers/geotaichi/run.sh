@@ -16,7 +16,7 @@ here=$(cd "$(dirname "$0")" && pwd); root=$(cd "$here/../../.." && pwd)
 venv=${GEOTAICHI_VENV:-$root/target/peers/geotaichi-venv}
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 
-if ! "$venv/bin/python" -c 'import src.mpm.mainMPM' 2>/dev/null; then
+if ! "$venv/bin/python" -c 'import src.mpm.mainMPM' >/dev/null 2>&1; then
   # Shapely 1.8.0 (pinned by GeoTaichi) builds from source against GEOS.
   dpkg -s libgeos-dev >/dev/null 2>&1 || { $SUDO apt-get update && $SUDO apt-get install -y libgeos-dev; }
   "${PYTHON:-python3}" -m venv "$venv"
