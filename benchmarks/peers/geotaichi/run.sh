@@ -21,7 +21,7 @@ if ! "$venv/bin/python" -c 'import src.mpm.mainMPM' >/dev/null 2>&1; then
   dpkg -s libgeos-dev >/dev/null 2>&1 || { $SUDO apt-get update && $SUDO apt-get install -y libgeos-dev; }
   "${PYTHON:-python3}" -m venv "$venv"
   # 0.2.6 declares Requires-Python <= 3.11, which excludes 3.11.x patch releases and newer.
-  "$venv/bin/pip" install --ignore-requires-python geotaichi==0.2.6
+  "$venv/bin/pip" install --ignore-requires-python geotaichi==0.2.6 >&2
 fi
 (cd "$root" && cargo build --release -p thm-benchmarks --example mpm_rate)
 ours="$root/target/release/examples/mpm_rate"
