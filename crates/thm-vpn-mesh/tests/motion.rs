@@ -403,7 +403,9 @@ fn fused_update_equals_the_separate_stages() {
     )
     .unwrap();
     staged.mesh.update_geometry();
-    staged.mesh.update_t2t_apertures(staged.t2t_reduction_factor);
+    staged
+        .mesh
+        .update_t2t_apertures(staged.t2t_reduction_factor);
     let mut rate = vec![0.0; staged.mesh.n_cells()];
     thm_vpn_mesh::motion::cell_area_rate(&staged.mesh, &vel, &mut rate).unwrap();
     let thickness = staged.mesh.thickness;
