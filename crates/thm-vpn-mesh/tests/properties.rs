@@ -97,8 +97,17 @@ proptest! {
         for n in [64u32, 128, 256] {
             let pm = mesh_packing(&cs, &ct, &settings(n)).unwrap();
             let e_union = (pm.mesh.solid_area() - union).abs();
+            // The rate is asymptotic: it needs the arcs of the cut piece resolved by the grid.
+            // A piece below 1 % of its disc (e.g. the cap of a circle almost inside another,
+            // 3·10⁻⁵ of the disc, narrower than one 64-segment step) keeps the same grid points
+            // from one resolution to the next until its arc is resolved, so it is left out.
             let e_circ: Vec<Option<f64>> = (0..cs.len())
-                .map(|i| cut_circle_area(&cs, i).map(|a| (pm.circle_solid_area(i) - a).abs()))
+                .map(|i| {
+                    let disc = std::f64::consts::PI * cs[i].radius.powi(2);
+                    cut_circle_area(&cs, i)
+                        .filter(|&a| a >= 1e-2 * disc)
+                        .map(|a| (pm.circle_solid_area(i) - a).abs())
+                })
                 .collect();
             if let Some((pu, pc)) = &prev {
                 if *pu > 1e-12 {
