@@ -240,9 +240,14 @@ impl RemapOperator {
         };
         // Packed corner coordinates of the new cells (one contiguous record per cell).
         let new_tri: Vec<[[f64; 2]; 3]> = (0..nn).map(|c| tri_points(new, c)).collect();
+        // Bin range and bounding box of every new cell, computed once.
+        let mut new_bins: Vec<[u32; 4]> = Vec::with_capacity(nn);
+        let mut new_bbox: Vec<([f64; 2], [f64; 2])> = Vec::with_capacity(nn);
         let mut start = vec![0u32; nx * ny + 1];
         for t in &new_tri {
-            let (x0, x1, y0, y1, ..) = bin_range(t);
+            let (x0, x1, y0, y1, a, b) = bin_range(t);
+            new_bins.push([x0 as u32, x1 as u32, y0 as u32, y1 as u32]);
+            new_bbox.push((a, b));
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     start[y * nx + x + 1] += 1;
@@ -254,23 +259,16 @@ impl RemapOperator {
         }
         let mut items = vec![0u32; start[nx * ny] as usize];
         let mut fill = start.clone();
-        for (c, t) in new_tri.iter().enumerate() {
-            let (x0, x1, y0, y1, ..) = bin_range(t);
-            for y in y0..=y1 {
-                for x in x0..=x1 {
+        for (c, &[x0, x1, y0, y1]) in new_bins.iter().enumerate() {
+            for y in y0 as usize..=y1 as usize {
+                for x in x0 as usize..=x1 as usize {
                     let b = y * nx + x;
                     items[fill[b] as usize] = c as u32;
                     fill[b] += 1;
                 }
             }
         }
-        let new_bbox: Vec<([f64; 2], [f64; 2])> = new_tri
-            .iter()
-            .map(|t| {
-                let (.., a, b) = bin_range(t);
-                (a, b)
-            })
-            .collect();
+        drop(new_bins);
         let mut new_adjacency = vec![[NONE; 3]; nn];
         for (c, faces) in new.cell_faces.iter().enumerate() {
             for k in 0..3 {
