@@ -9,14 +9,16 @@ use thm_vpn_mesh::packing::{PackingSpec, overlap_contacts, random_packing};
 use thm_vpn_mesh::*;
 
 fn packing() -> (Vec<Circle>, PackingSpec) {
-    // 10 000 circles of 4-8 mm at 10 % porosity fill about 0.55 m × 0.55 m.
-    let side = 0.553;
+    // 10 000 circles of 4-8 mm at 10 % porosity fill about 0.557 m × 0.557 m; the packing of
+    // a slightly larger square is cut to exactly 10 000.
+    let side = 0.558;
     let spec = PackingSpec {
         box_max: [side, side],
         sweeps: 300,
         ..PackingSpec::paper_bar(7)
     };
     let mut cs = random_packing(&spec);
+    assert!(cs.len() >= 10_000, "only {} circles", cs.len());
     cs.truncate(10_000);
     (cs, spec)
 }

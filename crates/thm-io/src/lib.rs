@@ -11,6 +11,8 @@
 //! - [`csv`]: time histories whose header names every column with its unit, `name [unit]`.
 //! - [`plot`]: PNG line plots of a [`thm_verify::Plot`] (measured markers, reference lines,
 //!   axes labelled with units) with an embedded font, and the plot's curves as CSV.
+//! - [`picture`]: PNG pictures of filled polygons and segments in world coordinates at equal
+//!   axis scales (a mesh coloured by cell type and owner).
 //! - [`checkpoint`]: `serde` save/load of any state with a container version, a kind tag
 //!   and a state layout version; a mismatch is a typed error, never a misread.
 //!
@@ -34,6 +36,7 @@ pub mod checkpoint;
 pub mod csv;
 mod error;
 pub mod fsutil;
+pub mod picture;
 pub mod plot;
 pub mod pvd;
 pub mod vtu;
@@ -43,6 +46,7 @@ pub use checkpoint::{
 };
 pub use csv::{Column, CsvHistory, write_csv};
 pub use error::IoError;
+pub use picture::{FilledPolygon, Picture, Segment, render_picture_png, write_picture_png};
 pub use plot::{render_plot_png, write_plot_csv, write_plot_png};
 pub use pvd::{PvdCollection, PvdFrame, VtuSeries};
 pub use vtu::{CellIndices, Cells, Encoding, Field, FieldValues, Points, UnstructuredGrid};

@@ -105,6 +105,14 @@ pub enum MeshError {
         /// The target filter in words.
         filter: &'static str,
     },
+    /// A picture or another output file could not be written.
+    #[error("{path}: cannot write: {message}")]
+    Output {
+        /// The file.
+        path: String,
+        /// What went wrong.
+        message: String,
+    },
     /// Mesh construction from triangles failed.
     #[error(transparent)]
     Topology(#[from] TopologyError),

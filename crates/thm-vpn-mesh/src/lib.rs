@@ -10,8 +10,9 @@
 //! conservatively.
 //!
 //! It does **not** solve flow or heat (`thm-vpn-flow`, `thm-fvm-heat` consume [`PoreMesh`]),
-//! compute contact stresses (the caller passes σ_n per contact), or write files (the shared
-//! `thm-io` writer takes the arrays of [`export`]).
+//! compute contact stresses (the caller passes σ_n per contact), or write files itself: the
+//! shared `thm-io` writers take the arrays of [`export`] (VTU) and the [`picture`] of a mesh
+//! (PNG).
 //!
 //! Units: SI throughout — lengths m, areas m², volumes `area × thickness` m³, stresses Pa,
 //! angles rad.
@@ -101,7 +102,10 @@
 //! triangle area, `dA/dt = ½[(u_b − u_a)×(p_c − p_a) + (p_b − p_a)×(u_c − u_a)]`, and
 //! `dV/dt = thickness · dA/dt`. With a box outline the rates sum to zero to round-off. The
 //! T2T apertures (A-Eq. 9) are recomputed on the moved triangles; the S2S apertures follow the
-//! contact stresses through [`PackingMesh::update_s2s_apertures`].
+//! contact stresses through [`PackingMesh::update_s2s_apertures`]. [`MeshMotion::update`] is
+//! one allocation-free pass per entity over precomputed index arrays (anchor rows per vertex;
+//! triangle corners for areas, centroids and dV/dt together; face ends; channel cells), the
+//! same numbers bit for bit as the stages called one by one.
 //!
 //! ## Remesh trigger
 //!
@@ -114,7 +118,9 @@
 //!
 //! ## Conservative remap ([`remap`])
 //!
-//! Old and new triangles are intersected exactly (Sutherland–Hodgman); an old cell's content
+//! Old and new triangles are intersected exactly (Sutherland–Hodgman, after a separating-edge
+//! test; the new cells meeting an old one are found by a walk over the new mesh from the cell
+//! holding its centroid, stopping once the old cell is covered); an old cell's content
 //! is split over the *admissible* new cells it overlaps (fluid fields → fluid cells; solid
 //! fields → solid cells of the same sphere, else any solid) in proportion to the overlap areas,
 //! normalised by their sum. So the part of an old pore now covered by solid does not destroy
@@ -123,6 +129,15 @@
 //! cell (breadth-first over the new faces from the cells it overlaps). Totals are conserved to
 //! round-off (tests: 1e-12 relative). Pressures and phase fractions are not remapped; they
 //! follow from the remapped masses through the closure (A-Sect. 2.4, A-Eq. 29).
+//!
+//! ## Picture
+//!
+//! [`picture::write_mesh_png`] draws a mesh through `thm-io`: fluid cells blue, solid cells in
+//! a few sand shades (touching spheres differ), channels as lines. The verification case
+//! `vpn_mesh/paper_bar` writes the 20 × 80 mm bar to `target/verify/vpn_mesh/paper_bar/mesh.png`;
+//! `docs/img/vpn_mesh_bar.png` is a copy:
+//!
+//! ![VPN mesh of the 20 × 80 mm bar](../../docs/img/vpn_mesh_bar.png)
 //!
 //! ## Robustness
 //!
@@ -149,6 +164,7 @@ mod mesh;
 pub mod mesher;
 pub mod motion;
 pub mod packing;
+pub mod picture;
 pub mod remap;
 
 pub use error::MeshError;
@@ -163,6 +179,7 @@ pub use motion::{
     CircleMotion, MeshMotion, RemeshCriteria, RemeshCriteriaParams, RemeshReason, VertexAnchors,
     VertexConstraint, remesh_needed,
 };
+pub use picture::{PictureStyle, write_mesh_png};
 pub use remap::{CellFilter, RemapOperator};
 
 pub mod verification;

@@ -193,6 +193,12 @@ pub enum TopologyError {
     },
 }
 
+/// One third (centroids are `(a + b + c) · ⅓`).
+const THIRD: f64 = 1.0 / 3.0;
+
+/// Faces per block of [`PoreMesh::update_face_geometry`].
+const FACE_BLOCK: usize = 16;
+
 fn signed_area(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]))
 }
@@ -452,36 +458,130 @@ impl PoreMesh {
             .sum()
     }
 
-    /// Recomputes cell areas and centroids and face lengths, normals and centroids from the
-    /// current vertex positions (after the vertices moved; topology unchanged).
+    /// Recomputes cell areas and centroids, face lengths, normals and mid-points, and channel
+    /// lengths from the current vertex positions (after the vertices moved; topology
+    /// unchanged). T2T apertures are refreshed by [`Self::update_t2t_apertures`].
     pub fn update_geometry(&mut self) {
-        for (c, t) in self.cell_vertices.iter().enumerate() {
-            let p = t.map(|v| self.vertices[v as usize]);
-            self.cell_area[c] = signed_area(p[0], p[1], p[2]);
-            self.cell_centroid[c] = [
-                (p[0][0] + p[1][0] + p[2][0]) / 3.0,
-                (p[0][1] + p[1][1] + p[2][1]) / 3.0,
+        self.update_cell_geometry();
+        self.update_face_geometry();
+        self.update_channel_geometry(None);
+    }
+
+    /// Stage "cells": area and centroid of every cell, one pass over the triangles.
+    pub fn update_cell_geometry(&mut self) {
+        let vx = &self.vertices;
+        for ((t, area), centroid) in self
+            .cell_vertices
+            .iter()
+            .zip(&mut self.cell_area)
+            .zip(&mut self.cell_centroid)
+        {
+            let [pa, pb, pc] = t.map(|v| vx[v as usize]);
+            *area = signed_area(pa, pb, pc);
+            *centroid = [
+                (pa[0] + pb[0] + pc[0]) * THIRD,
+                (pa[1] + pb[1] + pc[1]) * THIRD,
             ];
         }
-        for f in 0..self.face_vertices.len() {
-            let [a, b] = self.face_vertices[f];
-            let (pa, pb) = (self.vertices[a as usize], self.vertices[b as usize]);
-            let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
-            let len = (dx * dx + dy * dy).sqrt();
-            self.face_length[f] = len;
-            self.face_centroid[f] = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])];
+    }
+
+    /// Stage "cells" with the area rate: area, centroid and `dA/dt · rate_scale` of every
+    /// cell from the vertex velocities `vel`, in one pass (`dA/dt` is the exact derivative of
+    /// the triangle area, see [`crate::motion`]). `vel` has one entry per vertex and `rate`
+    /// one per cell (checked by the caller).
+    pub(crate) fn update_cell_geometry_and_rate(
+        &mut self,
+        vel: &[[f64; 2]],
+        rate_scale: f64,
+        rate: &mut [f64],
+    ) {
+        let vx = &self.vertices;
+        for (((t, area), centroid), rate) in self
+            .cell_vertices
+            .iter()
+            .zip(&mut self.cell_area)
+            .zip(&mut self.cell_centroid)
+            .zip(rate.iter_mut())
+        {
+            let [a, b, c] = t.map(|v| v as usize);
+            let (pa, pb, pc) = (vx[a], vx[b], vx[c]);
+            let (ua, ub, uc) = (vel[a], vel[b], vel[c]);
+            *area = signed_area(pa, pb, pc);
+            *centroid = [
+                (pa[0] + pb[0] + pc[0]) * THIRD,
+                (pa[1] + pb[1] + pc[1]) * THIRD,
+            ];
+            let e1 = [pb[0] - pa[0], pb[1] - pa[1]];
+            let e2 = [pc[0] - pa[0], pc[1] - pa[1]];
+            let d1 = [ub[0] - ua[0], ub[1] - ua[1]];
+            let d2 = [uc[0] - ua[0], uc[1] - ua[1]];
+            *rate = rate_scale
+                * (0.5 * ((d1[0] * e2[1] - d1[1] * e2[0]) + (e1[0] * d2[1] - e1[1] * d2[0])));
+        }
+    }
+
+    /// Stage "faces": length, unit normal and mid-point of every face, one pass. Faces go in
+    /// blocks of [`FACE_BLOCK`]: the end points are gathered first, then the square roots and
+    /// divisions of the block run as one branch-free loop the compiler vectorises.
+    pub fn update_face_geometry(&mut self) {
+        let vx = &self.vertices;
+        let blocks = self
+            .face_vertices
+            .chunks(FACE_BLOCK)
+            .zip(self.face_length.chunks_mut(FACE_BLOCK))
+            .zip(self.face_normal.chunks_mut(FACE_BLOCK))
+            .zip(self.face_centroid.chunks_mut(FACE_BLOCK));
+        for (((ends, length), normal), centroid) in blocks {
+            let (mut dx, mut dy) = ([0.0; FACE_BLOCK], [0.0; FACE_BLOCK]);
+            for (k, (&[a, b], centroid)) in ends.iter().zip(centroid.iter_mut()).enumerate() {
+                let (pa, pb) = (vx[a as usize], vx[b as usize]);
+                dx[k] = pb[0] - pa[0];
+                dy[k] = pb[1] - pa[1];
+                *centroid = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])];
+            }
+            let (mut len, mut inv) = ([0.0; FACE_BLOCK], [0.0; FACE_BLOCK]);
+            for k in 0..FACE_BLOCK {
+                len[k] = (dx[k] * dx[k] + dy[k] * dy[k]).sqrt();
+                inv[k] = if len[k] > 0.0 { 1.0 / len[k] } else { 0.0 };
+            }
             // Edge (a, b) is traversed counter-clockwise by its first cell, so the outward
             // normal of that cell is the edge direction rotated clockwise.
-            let inv = if len > 0.0 { 1.0 / len } else { 0.0 };
-            self.face_normal[f] = [dy * inv, -dx * inv];
+            for (k, (length, normal)) in length.iter_mut().zip(normal.iter_mut()).enumerate() {
+                *length = len[k];
+                *normal = [dy[k] * inv[k], -dx[k] * inv[k]];
+            }
         }
-        for ch in 0..self.channels.len() {
-            let [a, b] = self.channels.cells[ch];
-            let (pa, pb) = (
-                self.cell_centroid[a as usize],
-                self.cell_centroid[b as usize],
-            );
-            self.channels.length[ch] = ((pb[0] - pa[0]).powi(2) + (pb[1] - pa[1]).powi(2)).sqrt();
+    }
+
+    /// Stage "channels": the length of every channel (distance between the two cell
+    /// centroids) and, with `Some(γ)`, the T2T apertures of A-Eq. 9, one pass (after the cell
+    /// and face stages).
+    pub fn update_channel_geometry(&mut self, t2t_reduction_factor: Option<f64>) {
+        let ch = &mut self.channels;
+        let (centroid, normal, face_length) =
+            (&self.cell_centroid, &self.face_normal, &self.face_length);
+        for ((((kind, cells), face), length), aperture) in ch
+            .kind
+            .iter()
+            .zip(&ch.cells)
+            .zip(&ch.face)
+            .zip(&mut ch.length)
+            .zip(&mut ch.aperture)
+        {
+            let (p0, p1) = (centroid[cells[0] as usize], centroid[cells[1] as usize]);
+            let d = [p1[0] - p0[0], p1[1] - p0[1]];
+            let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
+            *length = len;
+            if let (Some(gamma), ChannelKind::T2T) = (t2t_reduction_factor, kind) {
+                let f = *face as usize;
+                let n = normal[f];
+                let sin_omega = if len > 0.0 {
+                    (n[0] * d[0] + n[1] * d[1]).abs() / len
+                } else {
+                    0.0
+                };
+                *aperture = gamma * face_length[f] * sin_omega;
+            }
         }
     }
 
@@ -518,30 +618,11 @@ impl PoreMesh {
         }
     }
 
-    /// Recomputes the aperture (A-Eq. 9) of every existing T2T channel from the current
-    /// geometry, in place (channel order and indices unchanged; call after
-    /// [`Self::update_geometry`]).
+    /// Recomputes the aperture (A-Eq. 9) of every existing T2T channel (and every channel
+    /// length) from the current geometry, in place (channel order and indices unchanged; call
+    /// after [`Self::update_geometry`]).
     pub fn update_t2t_apertures(&mut self, reduction_factor: f64) {
-        for ch in 0..self.channels.len() {
-            if self.channels.kind[ch] != ChannelKind::T2T {
-                continue;
-            }
-            let f = self.channels.face[ch] as usize;
-            let [c0, c1] = self.channels.cells[ch];
-            let (p0, p1) = (
-                self.cell_centroid[c0 as usize],
-                self.cell_centroid[c1 as usize],
-            );
-            let d = [p1[0] - p0[0], p1[1] - p0[1]];
-            let length = (d[0] * d[0] + d[1] * d[1]).sqrt();
-            let n = self.face_normal[f];
-            let sin_omega = if length > 0.0 {
-                (n[0] * d[0] + n[1] * d[1]).abs() / length
-            } else {
-                0.0
-            };
-            self.channels.aperture[ch] = reduction_factor * self.face_length[f] * sin_omega;
-        }
+        self.update_channel_geometry(Some(reduction_factor));
     }
 
     /// Rebuilds all T2T channels (dropping existing ones of that kind) with aperture

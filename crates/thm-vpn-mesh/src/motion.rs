@@ -33,23 +33,38 @@ pub enum VertexConstraint {
     Fixed,
 }
 
-/// Vertex anchors (struct-of-arrays, one entry per mesh vertex).
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+/// Vertex anchors: for each vertex its anchor circles with the offsets `(x₀ − c⁰) / r⁰`, in
+/// compressed rows (most vertices lie on one circle and have one anchor), plus its constraint
+/// and mesh-time position (struct-of-arrays).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct VertexAnchors {
-    /// Number of anchors (0–3).
-    pub count: Vec<u8>,
+    /// Anchors of vertex `v` are entries `start[v]..start[v + 1]` of `circle` and `offset`
+    /// (0–3 each); length `n_vertices + 1`.
+    pub start: Vec<u32>,
     /// Anchor circles (indices into the circle list at mesh time).
-    pub circle: Vec<[u32; 3]>,
+    pub circle: Vec<u32>,
     /// `(x₀ − c⁰) / r⁰` for each anchor [-].
-    pub offset: Vec<[[f64; 2]; 3]>,
+    pub offset: Vec<[f64; 2]>,
     /// Side or fixed constraint.
     pub constraint: Vec<VertexConstraint>,
     /// Position at mesh time [m].
     pub reference: Vec<[f64; 2]>,
 }
 
+impl Default for VertexAnchors {
+    fn default() -> Self {
+        Self {
+            start: vec![0],
+            circle: Vec::new(),
+            offset: Vec::new(),
+            constraint: Vec::new(),
+            reference: Vec::new(),
+        }
+    }
+}
+
 impl VertexAnchors {
-    /// Appends a vertex at `pos` anchored to `list` (at most three circles).
+    /// Appends a vertex at `pos` anchored to `list` (at most three circles are kept).
     pub fn push(
         &mut self,
         pos: [f64; 2],
@@ -57,31 +72,32 @@ impl VertexAnchors {
         constraint: VertexConstraint,
         circles: &[Circle],
     ) {
-        let mut circ = [crate::NONE; 3];
-        let mut off = [[0.0; 2]; 3];
-        for (k, &i) in list.iter().take(3).enumerate() {
+        for &i in list.iter().take(3) {
             let c = &circles[i as usize];
-            circ[k] = i;
-            off[k] = [
+            self.circle.push(i);
+            self.offset.push([
                 (pos[0] - c.centre[0]) / c.radius,
                 (pos[1] - c.centre[1]) / c.radius,
-            ];
+            ]);
         }
-        self.count.push(list.len().min(3) as u8);
-        self.circle.push(circ);
-        self.offset.push(off);
+        self.start.push(self.circle.len() as u32);
         self.constraint.push(constraint);
         self.reference.push(pos);
     }
 
     /// Number of vertices.
     pub fn len(&self) -> usize {
-        self.count.len()
+        self.constraint.len()
     }
 
     /// True when there is no vertex.
     pub fn is_empty(&self) -> bool {
-        self.count.is_empty()
+        self.constraint.is_empty()
+    }
+
+    /// Anchor circles of vertex `v`.
+    pub fn circles_of(&self, v: usize) -> &[u32] {
+        &self.circle[self.start[v] as usize..self.start[v + 1] as usize]
     }
 }
 
@@ -122,22 +138,11 @@ impl CircleMotion<'_> {
                 });
             }
         }
-        let check = |what: &'static str, v: &mut dyn Iterator<Item = f64>| {
-            for (index, value) in v.enumerate() {
-                if !value.is_finite() {
-                    return Err(MeshError::NonFinite { what, index, value });
-                }
-            }
-            Ok(())
-        };
-        check("centre", &mut self.centre.iter().flat_map(|c| *c))?;
-        check("rotation", &mut self.rotation.iter().copied())?;
-        check("velocity", &mut self.velocity.iter().flat_map(|c| *c))?;
-        check(
-            "angular_velocity",
-            &mut self.angular_velocity.iter().copied(),
-        )?;
-        check("radius_rate", &mut self.radius_rate.iter().copied())?;
+        check_finite("centre", self.centre.iter().flatten().copied())?;
+        check_finite("rotation", self.rotation.iter().copied())?;
+        check_finite("velocity", self.velocity.iter().flatten().copied())?;
+        check_finite("angular_velocity", self.angular_velocity.iter().copied())?;
+        check_finite("radius_rate", self.radius_rate.iter().copied())?;
         for (circle, &value) in self.radius.iter().enumerate() {
             if !(value.is_finite() && value > 0.0) {
                 return Err(MeshError::InvalidRadius { circle, value });
@@ -145,6 +150,17 @@ impl CircleMotion<'_> {
         }
         Ok(())
     }
+}
+
+/// The first non-finite value of `values` as a [`MeshError::NonFinite`] (index in the
+/// flattened sequence).
+fn check_finite(what: &'static str, values: impl Iterator<Item = f64>) -> Result<(), MeshError> {
+    for (index, value) in values.enumerate() {
+        if !value.is_finite() {
+            return Err(MeshError::NonFinite { what, index, value });
+        }
+    }
+    Ok(())
 }
 
 /// The rigid-body-plus-scaling frame of one circle: centre, `r (cos φ, sin φ)`, velocity,
@@ -196,69 +212,103 @@ pub fn vertex_kinematics(
             });
         }
     }
-    if let Some(&bad) = anchors
-        .circle
-        .iter()
-        .zip(&anchors.count)
-        .flat_map(|(c, &n)| c[..n as usize].iter())
-        .find(|&&i| i as usize >= n_circles)
-    {
-        return Err(MeshError::LengthMismatch {
-            what: "circle state (an anchor names a circle beyond it)",
-            expected: bad as usize + 1,
-            got: n_circles,
-        });
-    }
+    check_anchors(anchors, n_circles)?;
     let mut frames = Vec::new();
     circle_frames(motion, &mut frames);
     vertex_kinematics_in_frames(anchors, &frames, pos, vel);
     Ok(())
 }
 
-/// [`vertex_kinematics`] with the circle frames computed once ([`circle_frames`]).
+/// Position `y` and velocity `w` of the point with offset `o = (x₀ − c⁰) / r⁰` carried by the
+/// circle frame `f`.
+#[inline(always)]
+fn anchor_motion(f: &CircleFrame, o: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+    let rel = [
+        f.r_cos * o[0] - f.r_sin * o[1],
+        f.r_sin * o[0] + f.r_cos * o[1],
+    ];
+    (
+        [f.centre[0] + rel[0], f.centre[1] + rel[1]],
+        [
+            f.velocity[0] - f.omega * rel[1] + f.growth * rel[0],
+            f.velocity[1] + f.omega * rel[0] + f.growth * rel[1],
+        ],
+    )
+}
+
+/// Checks that the anchor rows are consistent and name circles below `n_circles`.
+fn check_anchors(anchors: &VertexAnchors, n_circles: usize) -> Result<(), MeshError> {
+    if anchors.start.len() != anchors.len() + 1
+        || anchors.start.last().map(|&e| e as usize) != Some(anchors.circle.len())
+        || anchors.offset.len() != anchors.circle.len()
+        || anchors.reference.len() != anchors.len()
+        || anchors.start.first() != Some(&0)
+        || anchors.start.windows(2).any(|w| w[0] > w[1])
+    {
+        return Err(MeshError::LengthMismatch {
+            what: "vertex anchor rows",
+            expected: anchors.len() + 1,
+            got: anchors.start.len(),
+        });
+    }
+    if let Some(&bad) = anchors.circle.iter().find(|&&i| i as usize >= n_circles) {
+        return Err(MeshError::LengthMismatch {
+            what: "circle state (an anchor names a circle beyond it)",
+            expected: bad as usize + 1,
+            got: n_circles,
+        });
+    }
+    Ok(())
+}
+
+/// [`vertex_kinematics`] with the circle frames computed once ([`circle_frames`]): one pass
+/// over the vertices and their anchor rows, no allocation.
 pub fn vertex_kinematics_in_frames(
     anchors: &VertexAnchors,
     frames: &[CircleFrame],
     pos: &mut [[f64; 2]],
     vel: &mut [[f64; 2]],
 ) {
-    for v in 0..anchors.len() {
-        let n = anchors.count[v] as usize;
-        let x0 = anchors.reference[v];
-        let (mut x, mut u) = ([0.0; 2], [0.0; 2]);
-        for k in 0..n {
-            let f = &frames[anchors.circle[v][k] as usize];
-            let o = anchors.offset[v][k];
-            let rel = [
-                f.r_cos * o[0] - f.r_sin * o[1],
-                f.r_sin * o[0] + f.r_cos * o[1],
-            ];
-            x[0] += f.centre[0] + rel[0];
-            x[1] += f.centre[1] + rel[1];
-            u[0] += f.velocity[0] - f.omega * rel[1] + f.growth * rel[0];
-            u[1] += f.velocity[1] + f.omega * rel[0] + f.growth * rel[1];
-        }
-        if n > 1 {
-            let inv = 1.0 / n as f64;
-            x = [x[0] * inv, x[1] * inv];
-            u = [u[0] * inv, u[1] * inv];
-        } else if n == 0 {
-            x = x0;
-        }
-        match anchors.constraint[v] {
+    // The mesh-time position is read only for the few vertices that need it (no anchor, or a
+    // constraint), so its cache lines are mostly left alone.
+    let x0 = &anchors.reference;
+    let rows = anchors.start.windows(2).zip(&anchors.constraint);
+    for (v, (((row, constraint), x_out), u_out)) in
+        rows.zip(pos.iter_mut()).zip(vel.iter_mut()).enumerate()
+    {
+        let (a, b) = (row[0] as usize, row[1] as usize);
+        let (mut x, mut u) = if b == a + 1 {
+            // The common case: a point on one circle.
+            anchor_motion(&frames[anchors.circle[a] as usize], anchors.offset[a])
+        } else {
+            let (mut x, mut u) = (x0[v], [0.0; 2]);
+            if b > a {
+                x = [0.0; 2];
+                for (&circle, &o) in anchors.circle[a..b].iter().zip(&anchors.offset[a..b]) {
+                    let (y, w) = anchor_motion(&frames[circle as usize], o);
+                    x = [x[0] + y[0], x[1] + y[1]];
+                    u = [u[0] + w[0], u[1] + w[1]];
+                }
+                let inv = 1.0 / (b - a) as f64;
+                x = [x[0] * inv, x[1] * inv];
+                u = [u[0] * inv, u[1] * inv];
+            }
+            (x, u)
+        };
+        match *constraint {
             VertexConstraint::Free => {}
             VertexConstraint::OnSide(s) => {
                 let k = if s < 2 { 0 } else { 1 };
-                x[k] = x0[k];
+                x[k] = x0[v][k];
                 u[k] = 0.0;
             }
             VertexConstraint::Fixed => {
-                x = x0;
+                x = x0[v];
                 u = [0.0; 2];
             }
         }
-        pos[v] = x;
-        vel[v] = u;
+        *x_out = x;
+        *u_out = u;
     }
 }
 
@@ -282,15 +332,16 @@ pub fn cell_area_rate(mesh: &PoreMesh, vel: &[[f64; 2]], out: &mut [f64]) -> Res
 }
 
 fn area_rate_into(mesh: &PoreMesh, vel: &[[f64; 2]], out: &mut [f64]) {
-    for (c, t) in mesh.cell_vertices.iter().enumerate() {
+    let vx = &mesh.vertices;
+    for (t, out) in mesh.cell_vertices.iter().zip(out.iter_mut()) {
         let [a, b, cc] = t.map(|v| v as usize);
-        let (pa, pb, pc) = (mesh.vertices[a], mesh.vertices[b], mesh.vertices[cc]);
+        let (pa, pb, pc) = (vx[a], vx[b], vx[cc]);
         let (ua, ub, uc) = (vel[a], vel[b], vel[cc]);
         let e1 = [pb[0] - pa[0], pb[1] - pa[1]];
         let e2 = [pc[0] - pa[0], pc[1] - pa[1]];
         let d1 = [ub[0] - ua[0], ub[1] - ua[1]];
         let d2 = [uc[0] - ua[0], uc[1] - ua[1]];
-        out[c] = 0.5 * ((d1[0] * e2[1] - d1[1] * e2[0]) + (e1[0] * d2[1] - e1[1] * d2[0]));
+        *out = 0.5 * ((d1[0] * e2[1] - d1[1] * e2[0]) + (e1[0] * d2[1] - e1[1] * d2[0]));
     }
 }
 
@@ -308,14 +359,18 @@ impl MeshMotion {
         Self::default()
     }
 
-    /// Stage sequence: validate the state, vertex kinematics, move the vertices, recompute the
-    /// geometry and the T2T apertures (A-Eq. 9 follows the triangles), and compute every cell's volume rate dV/dt [m³/s] (see [`Self::volume_rate`]).
+    /// Stage sequence, each stage one allocation-free pass over precomputed index arrays
+    /// (scratch is sized on the first call): validate the state; vertex kinematics (anchor
+    /// rows → positions and velocities); cells (areas, centroids and dV/dt, see
+    /// [`Self::volume_rate`]); faces (lengths, normals, mid-points); channels (lengths and
+    /// the T2T apertures of A-Eq. 9, which follow the triangles).
     pub fn update(
         &mut self,
         pm: &mut PackingMesh,
         motion: &CircleMotion<'_>,
     ) -> Result<(), MeshError> {
         motion.validate(pm.circles.len())?;
+        check_anchors(&pm.anchors, pm.circles.len())?;
         let nv = pm.anchors.len();
         if pm.mesh.vertices.len() != nv {
             return Err(MeshError::LengthMismatch {
@@ -325,6 +380,7 @@ impl MeshMotion {
             });
         }
         self.velocity.resize(nv, [0.0; 2]);
+        self.volume_rate.resize(pm.mesh.n_cells(), 0.0);
         circle_frames(motion, &mut self.frames);
         vertex_kinematics_in_frames(
             &pm.anchors,
@@ -332,14 +388,12 @@ impl MeshMotion {
             &mut pm.mesh.vertices,
             &mut self.velocity,
         );
-        pm.mesh.update_geometry();
-        pm.mesh.update_t2t_apertures(pm.t2t_reduction_factor);
-        self.volume_rate.resize(pm.mesh.n_cells(), 0.0);
-        area_rate_into(&pm.mesh, &self.velocity, &mut self.volume_rate);
-        let t = pm.mesh.thickness;
-        for r in self.volume_rate.iter_mut() {
-            *r *= t;
-        }
+        let thickness = pm.mesh.thickness;
+        pm.mesh
+            .update_cell_geometry_and_rate(&self.velocity, thickness, &mut self.volume_rate);
+        pm.mesh.update_face_geometry();
+        pm.mesh
+            .update_channel_geometry(Some(pm.t2t_reduction_factor));
         Ok(())
     }
 

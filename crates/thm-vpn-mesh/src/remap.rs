@@ -1,9 +1,13 @@
 //! Conservative transfer of extensive cell fields from an old mesh to a new one.
 //!
-//! [`RemapOperator::new`] intersects every old triangle with the new triangles it may touch
-//! (a uniform bin grid over the new triangles' bounding boxes, then Sutherland–Hodgman
-//! clipping of one triangle by the three edges of the other) and stores the overlap areas
-//! `A(o ∩ n)` as a sparse old → new matrix. [`RemapOperator::apply`] moves an extensive field
+//! [`RemapOperator::new`] intersects every old triangle with the new triangles it touches
+//! and stores the overlap areas `A(o ∩ n)` as a sparse old → new matrix. The new cell holding
+//! the old cell's centroid is found in a uniform bin grid; from it a breadth-first walk over
+//! the new mesh's faces visits the new cells meeting the old one (the new cells meeting a
+//! convex cell form an edge-connected set) and stops when the overlaps found cover the old
+//! cell (to 10⁻⁹ of its area). Each pair is intersected by [`triangle_overlap_area`]: a
+//! separating-edge test, then Sutherland–Hodgman clipping by the edges that cut, in fixed
+//! buffers. [`RemapOperator::apply`] moves an extensive field
 //! `q` (a phase mass, an energy) with it:
 //!
 //! - the admissible new cells of an old cell `o` are those of the field's [`CellFilter`]
@@ -62,61 +66,119 @@ pub struct RemapOperator {
     new_adjacency: Vec<[u32; 3]>,
 }
 
-/// Area of the intersection of two counter-clockwise triangles.
+/// Largest vertex count of a triangle clipped by three half-planes (6), with room for the
+/// extra crossings round-off can create on near-degenerate input.
+const CLIP_CAPACITY: usize = 8;
+
+/// The walk over the new cells meeting an old cell stops once the overlaps found add up to
+/// this fraction of the old cell's area (what is left can only be slivers of relative size
+/// below 10⁻⁹, far below the accuracy of the fields moved; totals are exact regardless).
+const COVERED_FRACTION: f64 = 1.0 - 1e-9;
+
+/// `(p1 − p0) × (q − p0)`: positive when `q` is left of the directed line `p0 → p1`.
+#[inline(always)]
+fn orient(p0: [f64; 2], p1: [f64; 2], q: [f64; 2]) -> f64 {
+    (p1[0] - p0[0]) * (q[1] - p0[1]) - (p1[1] - p0[1]) * (q[0] - p0[0])
+}
+
+/// Area of the intersection of two counter-clockwise triangles [m²].
+///
+/// Both triangles are first moved to a local origin (`a`'s first corner), so the result
+/// does not lose digits to the distance from the global origin. The nine orientations of
+/// `a`'s corners against `b`'s edges decide the common cases at once: an edge with all of
+/// `a` on its outer side separates them (area 0, exactly); `a` inside `b` gives `a`'s area.
+/// Otherwise `a` is clipped by the edges of `b` that cut it (Sutherland–Hodgman) in two
+/// fixed-size buffers, with no allocation, and the area is that of the clipped polygon.
 pub fn triangle_overlap_area(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3]) -> f64 {
-    let mut cur = [[0.0f64; 2]; 9];
-    cur[..3].copy_from_slice(a);
-    let mut n = 3usize;
-    let mut next = [[0.0f64; 2]; 9];
-    let mut side = [0.0f64; 9];
-    for k in 0..3 {
-        let p0 = b[k];
-        let p1 = b[if k == 2 { 0 } else { k + 1 }];
-        let e = [p1[0] - p0[0], p1[1] - p0[1]];
-        let mut all_in = true;
-        let mut any_in = false;
-        for i in 0..n {
-            let s = e[0] * (cur[i][1] - p0[1]) - e[1] * (cur[i][0] - p0[0]);
-            side[i] = s;
-            all_in &= s >= 0.0;
-            any_in |= s >= 0.0;
-        }
-        if all_in {
-            continue;
-        }
-        if !any_in {
+    let o = a[0];
+    let a = a.map(|p| [p[0] - o[0], p[1] - o[1]]);
+    let b = b.map(|p| [p[0] - o[0], p[1] - o[1]]);
+    // side_a[k][i]: corner i of `a` against edge k of `b` (and the other way round).
+    let mut side_a = [[0.0f64; 3]; 3];
+    for (k, row) in side_a.iter_mut().enumerate() {
+        let (p0, p1) = (b[k], b[(k + 1) % 3]);
+        *row = [
+            orient(p0, p1, a[0]),
+            orient(p0, p1, a[1]),
+            orient(p0, p1, a[2]),
+        ];
+        if row.iter().all(|&s| s <= 0.0) {
             return 0.0;
         }
-        let mut m = 0usize;
-        for i in 0..n {
-            let j = if i + 1 == n { 0 } else { i + 1 };
-            let (su, sv) = (side[i], side[j]);
-            if su >= 0.0 {
-                next[m] = cur[i];
-                m += 1;
-            }
-            if (su >= 0.0) != (sv >= 0.0) && m < 9 {
-                let t = su / (su - sv);
-                let (u, v) = (cur[i], cur[j]);
-                next[m] = [u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1])];
-                m += 1;
-            }
-            if m >= 9 {
-                break;
+    }
+    if side_a.iter().flatten().all(|&s| s >= 0.0) {
+        return (0.5 * orient(a[0], a[1], a[2])).max(0.0);
+    }
+    // Clip `a` by the edges of `b` that cut it. An edge with all three corners of `a` on its
+    // inner side leaves every polygon inside `a` unchanged, so it is skipped; while nothing
+    // has been cut, the orientations are those already computed.
+    let mut bufs = [[[0.0f64; 2]; CLIP_CAPACITY]; 2];
+    bufs[0][..3].copy_from_slice(&a);
+    let (mut cur, mut n, mut original) = (0usize, 3usize, true);
+    for (k, row) in side_a.iter().enumerate() {
+        if row.iter().all(|&s| s >= 0.0) {
+            continue;
+        }
+        let (p0, p1) = (b[k], b[(k + 1) % 3]);
+        let mut side = [0.0f64; CLIP_CAPACITY];
+        if original {
+            side[..3].copy_from_slice(row);
+        } else {
+            for (s, &q) in side[..n].iter_mut().zip(&bufs[cur][..n]) {
+                *s = orient(p0, p1, q);
             }
         }
-        std::mem::swap(&mut cur, &mut next);
-        n = m;
+        let [first, second] = &mut bufs;
+        n = if cur == 0 {
+            clip_by_edge(&first[..n], &side[..n], second)
+        } else {
+            clip_by_edge(&second[..n], &side[..n], first)
+        };
+        cur = 1 - cur;
+        original = false;
         if n < 3 {
             return 0.0;
         }
     }
-    let mut s = 0.0;
+    polygon_area(&bufs[cur][..n])
+}
+
+/// One Sutherland–Hodgman step: the polygon `src` with orientations `side` against a line
+/// (≥ 0 inside) clipped to the inner half-plane into `dst`; returns the new vertex count.
+#[inline(always)]
+fn clip_by_edge(src: &[[f64; 2]], side: &[f64], dst: &mut [[f64; 2]; CLIP_CAPACITY]) -> usize {
+    let n = src.len();
+    let mut m = 0usize;
     for i in 0..n {
-        let (p, q) = (cur[i], cur[if i + 1 == n { 0 } else { i + 1 }]);
-        s += p[0] * q[1] - p[1] * q[0];
+        let j = if i + 1 == n { 0 } else { i + 1 };
+        let (su, sv) = (side[i], side[j]);
+        if su >= 0.0 && m < CLIP_CAPACITY {
+            dst[m] = src[i];
+            m += 1;
+        }
+        if (su >= 0.0) != (sv >= 0.0) && m < CLIP_CAPACITY {
+            let t = su / (su - sv);
+            let (u, v) = (src[i], src[j]);
+            dst[m] = [u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1])];
+            m += 1;
+        }
     }
-    (0.5 * s).max(0.0)
+    m
+}
+
+/// Area of a counter-clockwise polygon (shoelace), 0 for fewer than three vertices or a
+/// negative round-off result.
+fn polygon_area(p: &[[f64; 2]]) -> f64 {
+    let n = p.len();
+    if n < 3 {
+        return 0.0;
+    }
+    let mut twice = 0.0;
+    for i in 0..n {
+        let (u, v) = (p[i], p[if i + 1 == n { 0 } else { i + 1 }]);
+        twice += u[0] * v[1] - u[1] * v[0];
+    }
+    (0.5 * twice).max(0.0)
 }
 
 fn tri_points(m: &PoreMesh, c: usize) -> [[f64; 2]; 3] {
@@ -171,15 +233,21 @@ impl RemapOperator {
                     b[k] = b[k].max(q[k]);
                 }
             }
-            let ix = |x: f64| (((x - lo[0]) / hx).floor().max(0.0) as usize).min(nx - 1);
-            let iy = |y: f64| (((y - lo[1]) / hy).floor().max(0.0) as usize).min(ny - 1);
+            // Truncation is the floor here: the argument is clamped to ≥ 0 first.
+            let ix = |x: f64| (((x - lo[0]) / hx).max(0.0) as usize).min(nx - 1);
+            let iy = |y: f64| (((y - lo[1]) / hy).max(0.0) as usize).min(ny - 1);
             (ix(a[0]), ix(b[0]), iy(a[1]), iy(b[1]), a, b)
         };
         // Packed corner coordinates of the new cells (one contiguous record per cell).
         let new_tri: Vec<[[f64; 2]; 3]> = (0..nn).map(|c| tri_points(new, c)).collect();
+        // Bin range and bounding box of every new cell, computed once.
+        let mut new_bins: Vec<[u32; 4]> = Vec::with_capacity(nn);
+        let mut new_bbox: Vec<([f64; 2], [f64; 2])> = Vec::with_capacity(nn);
         let mut start = vec![0u32; nx * ny + 1];
         for t in &new_tri {
-            let (x0, x1, y0, y1, ..) = bin_range(t);
+            let (x0, x1, y0, y1, a, b) = bin_range(t);
+            new_bins.push([x0 as u32, x1 as u32, y0 as u32, y1 as u32]);
+            new_bbox.push((a, b));
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     start[y * nx + x + 1] += 1;
@@ -191,23 +259,16 @@ impl RemapOperator {
         }
         let mut items = vec![0u32; start[nx * ny] as usize];
         let mut fill = start.clone();
-        for (c, t) in new_tri.iter().enumerate() {
-            let (x0, x1, y0, y1, ..) = bin_range(t);
-            for y in y0..=y1 {
-                for x in x0..=x1 {
+        for (c, &[x0, x1, y0, y1]) in new_bins.iter().enumerate() {
+            for y in y0 as usize..=y1 as usize {
+                for x in x0 as usize..=x1 as usize {
                     let b = y * nx + x;
                     items[fill[b] as usize] = c as u32;
                     fill[b] += 1;
                 }
             }
         }
-        let new_bbox: Vec<([f64; 2], [f64; 2])> = new_tri
-            .iter()
-            .map(|t| {
-                let (.., a, b) = bin_range(t);
-                (a, b)
-            })
-            .collect();
+        drop(new_bins);
         let mut new_adjacency = vec![[NONE; 3]; nn];
         for (c, faces) in new.cell_faces.iter().enumerate() {
             for k in 0..3 {
@@ -224,7 +285,7 @@ impl RemapOperator {
         let mut target = Vec::with_capacity(no * 6);
         let mut area = Vec::with_capacity(no * 6);
         let mut stamp = vec![NONE; nn];
-        let mut stack: Vec<u32> = Vec::with_capacity(64);
+        let mut queue: Vec<u32> = Vec::with_capacity(64);
         let contains = |t: &[[f64; 2]; 3], g: [f64; 2]| {
             (0..3).all(|k| {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
@@ -248,29 +309,33 @@ impl RemapOperator {
                 match seed {
                     Some(s) => {
                         let (.., a, b) = bin_range(&p);
+                        // Once the overlaps found cover the old cell, what is left on the
+                        // stack can only touch it in slivers below round-off: stop there.
+                        let full = COVERED_FRACTION * 0.5 * orient(p[0], p[1], p[2]);
+                        let mut covered = 0.0;
+                        // Breadth first: the seed's neighbours, which hold most of the
+                        // rest of the old cell, come before their own neighbours.
                         stamp[s as usize] = tag;
-                        stack.push(s);
-                        while let Some(c) = stack.pop() {
-                            let t = &new_tri[c as usize];
-                            let (tx0, tx1) = (
-                                t[0][0].min(t[1][0]).min(t[2][0]),
-                                t[0][0].max(t[1][0]).max(t[2][0]),
-                            );
-                            let (ty0, ty1) = (
-                                t[0][1].min(t[1][1]).min(t[2][1]),
-                                t[0][1].max(t[1][1]).max(t[2][1]),
-                            );
-                            if tx0 >= b[0] || tx1 <= a[0] || ty0 >= b[1] || ty1 <= a[1] {
+                        queue.clear();
+                        queue.push(s);
+                        let mut head = 0;
+                        while head < queue.len() && covered < full {
+                            let c = queue[head];
+                            head += 1;
+                            let (tlo, thi) = new_bbox[c as usize];
+                            if tlo[0] >= b[0] || thi[0] <= a[0] || tlo[1] >= b[1] || thi[1] <= a[1]
+                            {
                                 continue;
                             }
                             let ov = triangle_overlap_area(&p, &new_tri[c as usize]);
                             if ov > 0.0 {
                                 target.push(c);
                                 area.push(ov);
+                                covered += ov;
                                 for &n in &new_adjacency[c as usize] {
                                     if n != NONE && stamp[n as usize] != tag {
                                         stamp[n as usize] = tag;
-                                        stack.push(n);
+                                        queue.push(n);
                                     }
                                 }
                             }

@@ -1,6 +1,11 @@
 //! Verification cases of this crate, collected by `cargo xtask verify`.
 
+use std::path::{Path, PathBuf};
+
 use thm_verify::{Case, CaseError, CaseOutput, Row};
+
+use crate::error::MeshError;
+use crate::picture::{PictureStyle, write_mesh_png};
 
 use crate::mesher::{Circle, MeshParams, Outline, PackingMesh, mesh_packing};
 use crate::motion::{CircleMotion, MeshMotion};
@@ -229,5 +234,35 @@ fn paper_bar() -> Result<CaseOutput, CaseError> {
          channel: no pore touches them"
             .into(),
     );
+    // The picture of the mesh for the documentation (docs/img/vpn_mesh_bar.png is a copy).
+    let path = case_dir().join("mesh.png");
+    let style = PictureStyle {
+        title: format!("20 x 80 mm bar, {n} segments"),
+        width_px: 420,
+        channels: true,
+    };
+    let written = thm_io::fsutil::create_dir_all(&case_dir())
+        .map_err(|e| MeshError::Output {
+            path: case_dir().display().to_string(),
+            message: e.to_string(),
+        })
+        .and_then(|()| write_mesh_png(m, &style, &path));
+    out.notes.push(match written {
+        Ok(()) => format!(
+            "picture of the mesh (fluid cells blue, solid cells shaded by sphere, channels as \
+             lines): {}",
+            path.display()
+        ),
+        Err(e) => format!("picture of the mesh not written: {e}"),
+    });
     Ok(out)
+}
+
+/// Where `cargo xtask verify` puts this case's files by default: `target/verify/<case name>`
+/// (`$CARGO_TARGET_DIR` if set, else the workspace's `target`).
+fn case_dir() -> PathBuf {
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target"));
+    target.join("verify").join("vpn_mesh").join("paper_bar")
 }

@@ -378,3 +378,70 @@ fn rest_state_is_the_reference() {
         assert!((a[0] - b[0]).abs() < 1e-17 && (a[1] - b[1]).abs() < 1e-17);
     }
 }
+
+/// The fused update (one pass per entity) gives the same geometry, apertures and dV/dt, bit
+/// for bit, as the stages called one by one: vertex kinematics, `update_geometry`,
+/// `update_t2t_apertures`, `cell_area_rate` × thickness.
+#[test]
+fn fused_update_equals_the_separate_stages() {
+    let (cs, pm) = bar();
+    let r = rates(cs.len());
+    let st = State::at(&cs, &r, 2e-3);
+    let mut fused = pm.clone();
+    let mut mm = MeshMotion::new();
+    mm.update(&mut fused, &st.motion()).unwrap();
+
+    let mut staged = pm.clone();
+    let n = staged.anchors.len();
+    let mut vel = vec![[0.0; 2]; n];
+    vertex_kinematics(
+        &staged.anchors,
+        cs.len(),
+        &st.motion(),
+        &mut staged.mesh.vertices,
+        &mut vel,
+    )
+    .unwrap();
+    staged.mesh.update_geometry();
+    staged
+        .mesh
+        .update_t2t_apertures(staged.t2t_reduction_factor);
+    let mut rate = vec![0.0; staged.mesh.n_cells()];
+    thm_vpn_mesh::motion::cell_area_rate(&staged.mesh, &vel, &mut rate).unwrap();
+    let thickness = staged.mesh.thickness;
+    rate.iter_mut().for_each(|x| *x *= thickness);
+
+    assert_eq!(fused.mesh, staged.mesh);
+    assert_eq!(mm.vertex_velocity(), &vel[..]);
+    assert_eq!(mm.volume_rate(), &rate[..]);
+    // The mesh did move.
+    assert_ne!(fused.mesh.vertices, pm.mesh.vertices);
+}
+
+/// Inconsistent anchor rows (a hand-edited or truncated saved mesh) are a typed error, not a
+/// panic.
+#[test]
+fn broken_anchor_rows_are_a_typed_error() {
+    let (cs, pm) = bar();
+    let st = State::at(&cs, &rates(cs.len()), 0.0);
+    let mut mm = MeshMotion::new();
+    let mut bad = pm.clone();
+    bad.anchors.start.pop();
+    assert!(matches!(
+        mm.update(&mut bad, &st.motion()),
+        Err(MeshError::LengthMismatch { .. })
+    ));
+    let mut bad = pm.clone();
+    let last = bad.anchors.start.len() - 1;
+    bad.anchors.start.swap(1, last);
+    assert!(matches!(
+        mm.update(&mut bad, &st.motion()),
+        Err(MeshError::LengthMismatch { .. })
+    ));
+    let mut bad = pm;
+    bad.anchors.circle[0] = cs.len() as u32;
+    assert!(matches!(
+        mm.update(&mut bad, &st.motion()),
+        Err(MeshError::LengthMismatch { .. })
+    ));
+}

@@ -97,8 +97,17 @@ proptest! {
         for n in [64u32, 128, 256] {
             let pm = mesh_packing(&cs, &ct, &settings(n)).unwrap();
             let e_union = (pm.mesh.solid_area() - union).abs();
+            // The rate is asymptotic: it needs the arcs of the cut piece resolved by the grid.
+            // A piece below 1 % of its disc (e.g. the cap of a circle almost inside another,
+            // 3·10⁻⁵ of the disc, narrower than one 64-segment step) keeps the same grid points
+            // from one resolution to the next until its arc is resolved, so it is left out.
             let e_circ: Vec<Option<f64>> = (0..cs.len())
-                .map(|i| cut_circle_area(&cs, i).map(|a| (pm.circle_solid_area(i) - a).abs()))
+                .map(|i| {
+                    let disc = std::f64::consts::PI * cs[i].radius.powi(2);
+                    cut_circle_area(&cs, i)
+                        .filter(|&a| a >= 1e-2 * disc)
+                        .map(|a| (pm.circle_solid_area(i) - a).abs())
+                })
                 .collect();
             if let Some((pu, pc)) = &prev {
                 if *pu > 1e-12 {
@@ -113,6 +122,48 @@ proptest! {
                 }
             }
             prev = Some((e_union, e_circ));
+        }
+    }
+
+    /// After a random motion of the circles (translation, rotation, growth) the moved mesh
+    /// still tiles the box: fluid + solid area = box area to round-off, and the cell volume
+    /// rates sum to zero relative to their magnitude (the box does not move).
+    #[test]
+    fn moved_mesh_still_tiles_the_box(
+        cs in inner_circles_strategy(10),
+        rates in prop::collection::vec(
+            (-0.02f64..0.02, -0.02f64..0.02, -0.5f64..0.5, -0.01f64..0.01), 10),
+        t in 0.01f64..0.2,
+        n in 12u32..40,
+    ) {
+        let pm = mesh_packing(&cs, &overlap_contacts(&cs, 1e7), &settings(n)).unwrap();
+        let k = cs.len();
+        let velocity: Vec<[f64; 2]> = rates[..k].iter().map(|r| [r.0, r.1]).collect();
+        let angular_velocity: Vec<f64> = rates[..k].iter().map(|r| r.2).collect();
+        let radius_rate: Vec<f64> = rates[..k].iter().map(|r| r.3 * 0.1).collect();
+        let centre: Vec<[f64; 2]> = cs.iter().zip(&velocity)
+            .map(|(c, v)| [c.centre[0] + v[0] * t, c.centre[1] + v[1] * t]).collect();
+        let radius: Vec<f64> = cs.iter().zip(&radius_rate).map(|(c, r)| c.radius + r * t).collect();
+        let rotation: Vec<f64> = angular_velocity.iter().map(|w| w * t).collect();
+        let motion = CircleMotion {
+            centre: &centre,
+            radius: &radius,
+            rotation: &rotation,
+            velocity: &velocity,
+            angular_velocity: &angular_velocity,
+            radius_rate: &radius_rate,
+        };
+        let mut moved = pm.clone();
+        let mut mm = MeshMotion::new();
+        mm.update(&mut moved, &motion).unwrap();
+        let m = &moved.mesh;
+        prop_assert!((m.fluid_area() + m.solid_area() - 1.0).abs() < 1e-12);
+        let sum: f64 = mm.volume_rate().iter().sum();
+        let scale: f64 = mm.volume_rate().iter().map(|r| r.abs()).sum();
+        prop_assert!(sum.abs() <= 1e-12 * scale.max(1e-300), "{sum} vs {scale}");
+        // The motion moved something whenever a circle moves.
+        if k > 0 && velocity.iter().any(|v| v[0] != 0.0 || v[1] != 0.0) {
+            prop_assert!(m.vertices != pm.mesh.vertices);
         }
     }
 

@@ -92,3 +92,62 @@ fn triangle_overlap_of_known_shapes() {
     let far = [[5.0, 5.0], [6.0, 5.0], [5.0, 6.0]];
     assert_eq!(triangle_overlap_area(&a, &far), 0.0);
 }
+
+fn area(t: &[[f64; 2]; 3]) -> f64 {
+    0.5 * ((t[1][0] - t[0][0]) * (t[2][1] - t[0][1]) - (t[2][0] - t[0][0]) * (t[1][1] - t[0][1]))
+}
+
+/// A counter-clockwise triangle from three points (`None` if nearly degenerate).
+fn ccw(p: [[f64; 2]; 3]) -> Option<[[f64; 2]; 3]> {
+    let a = area(&p);
+    let scale = (0..3)
+        .map(|k| (p[k][0] - p[(k + 1) % 3][0]).hypot(p[k][1] - p[(k + 1) % 3][1]))
+        .fold(0.0, f64::max);
+    if a.abs() < 1e-3 * scale * scale {
+        None
+    } else if a > 0.0 {
+        Some(p)
+    } else {
+        Some([p[0], p[2], p[1]])
+    }
+}
+
+fn point() -> impl proptest::strategy::Strategy<Value = [f64; 2]> {
+    use proptest::prelude::*;
+    (-1.0f64..1.0, -1.0f64..1.0).prop_map(|(x, y)| [x, y])
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(400))]
+
+    /// The overlap area is symmetric (clipping `a` by `b` and `b` by `a` are different
+    /// computations), bounded by both areas, additive when `b` is split in two along a line
+    /// from a corner, and the same after moving both triangles far from the origin.
+    #[test]
+    fn overlap_area_is_a_measure(
+        pa in [point(), point(), point()],
+        pb in [point(), point(), point()],
+        split in 0.05f64..0.95,
+        shift in (-1e3f64..1e3, -1e3f64..1e3),
+    ) {
+        let (Some(a), Some(b)) = (ccw(pa), ccw(pb)) else { return Ok(()) };
+        let tol = 1e-13;
+        let ab = triangle_overlap_area(&a, &b);
+        let ba = triangle_overlap_area(&b, &a);
+        proptest::prop_assert!((ab - ba).abs() <= tol, "{ab} vs {ba}");
+        proptest::prop_assert!(ab >= 0.0 && ab <= area(&a).min(area(&b)) + tol);
+        // b = b1 ∪ b2, split at a point on the edge b1–b2.
+        let m = [
+            b[1][0] + split * (b[2][0] - b[1][0]),
+            b[1][1] + split * (b[2][1] - b[1][1]),
+        ];
+        let (b1, b2) = ([b[0], b[1], m], [b[0], m, b[2]]);
+        let parts = triangle_overlap_area(&a, &b1) + triangle_overlap_area(&a, &b2);
+        proptest::prop_assert!((ab - parts).abs() <= tol, "{ab} vs {parts}");
+        // Far from the origin the result keeps its absolute accuracy.
+        let mv = |t: [[f64; 2]; 3]| t.map(|p| [p[0] + shift.0, p[1] + shift.1]);
+        let far = triangle_overlap_area(&mv(a), &mv(b));
+        proptest::prop_assert!((ab - far).abs() <= 1e-12 * (1.0 + shift.0.abs().max(shift.1.abs())), "{ab} vs {far}");
+        proptest::prop_assert!((triangle_overlap_area(&a, &a) - area(&a)).abs() <= tol);
+    }
+}
