@@ -112,6 +112,7 @@ pub mod packing;
 pub mod state;
 pub mod stepper;
 pub mod vec3;
+pub mod vector;
 pub mod verification;
 
 pub use contact::{
@@ -123,3 +124,4 @@ pub use error::DemError;
 pub use state::{BondBreak, ContactList, DemState, Kinematics, ParticleState, Wall};
 pub use stepper::{Stepper, StepperConfig, StepperParams, critical_time_step};
 pub use vec3::Vec3;
+pub use vector::{SpaceVector, Vec2};

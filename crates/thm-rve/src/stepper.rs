@@ -22,7 +22,7 @@ use crate::neighbour::{Candidate, PeriodicGrid};
 use crate::params::RveConfig;
 use crate::state::{PeriodicContacts, RveState};
 use serde::{Deserialize, Serialize};
-use thm_dem::{ContactHistory, ContactKinematics, ContactLaw, PairInput, Vec3};
+use thm_dem::{ContactHistory, ContactKinematics, ContactLaw, PairInput, Vec2, Vec3};
 
 /// What the material point imposes on its RVE for one macroscopic step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -199,14 +199,16 @@ impl RveStepper {
             *t = Vec3::ZERO;
         }
         let contacts = &mut state.contacts;
-        let cell = &state.cell;
+        let h = *state.cell.matrix();
         let mut moment = Mat2::ZERO;
         let mut heat = 0.0;
         for c in 0..contacts.pair.len() {
             let [a, b] = contacts.pair[c];
             let (a, b) = (a as usize, b as usize);
+            let [s0, s1] = contacts.shift[c];
+            let lattice = h.apply_vec2(Vec2::new(f64::from(s0), f64::from(s1)));
             let branch =
-                disks.position[b] + cell.lattice_vector(contacts.shift[c]) - disks.position[a];
+                Vec2::from_xy(disks.position[b]) + lattice - Vec2::from_xy(disks.position[a]);
             contacts.branch[c] = branch;
             let history = &mut contacts.history[c];
             let (ra, rb) = (disks.radius[a], disks.radius[b]);
@@ -214,17 +216,19 @@ impl RveStepper {
             if history.bond != thm_dem::BondState::Intact && branch.norm_squared() >= reach * reach
             {
                 // Apart and unbonded: the law would return zero and clear the shear force.
-                history.shear_force = Vec3::ZERO;
-                history.normal = Vec3::ZERO;
-                contacts.force_on_b[c] = Vec3::ZERO;
+                history.shear_force = Vec2::ZERO;
+                history.normal = Vec2::ZERO;
+                contacts.force_on_b[c] = Vec2::ZERO;
                 continue;
             }
-            let relative_velocity = disks.velocity[b] - disks.velocity[a] + l.apply(branch);
-            let kinematics = ContactKinematics::from_pair(
+            let relative_velocity = Vec2::from_xy(disks.velocity[b])
+                - Vec2::from_xy(disks.velocity[a])
+                + l.apply_vec2(branch);
+            let kinematics = ContactKinematics::<Vec2>::from_pair(
                 branch,
                 relative_velocity,
-                disks.angular_velocity[a],
-                disks.angular_velocity[b],
+                disks.angular_velocity[a].z,
+                disks.angular_velocity[b].z,
                 ra,
                 rb,
                 dt,
@@ -235,13 +239,13 @@ impl RveStepper {
                 temperature: 0.5 * (disks.temperature[a] + disks.temperature[b]),
             };
             let r = law.respond(&pair, &kinematics, history);
-            contacts.force_on_b[c] = r.force_on_b;
-            disks.force[b] += r.force_on_b;
-            disks.force[a] -= r.force_on_b;
-            disks.torque[a] += r.torque_on_a;
-            disks.torque[b] += r.torque_on_b;
-            let m = Mat2::outer(r.force_on_b, branch);
-            moment = moment.add_scaled(&m, 1.0);
+            let f = r.force_on_b;
+            contacts.force_on_b[c] = f;
+            disks.force[b] += f.to_vec3();
+            disks.force[a] -= f.to_vec3();
+            disks.torque[a].z += r.torque_on_a;
+            disks.torque[b].z += r.torque_on_b;
+            moment = moment.add_scaled(&Mat2::outer_vec2(f, branch), 1.0);
             heat += r.friction_work;
         }
         state.contact_moment = moment;

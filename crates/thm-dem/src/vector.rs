@@ -1,0 +1,305 @@
+//! The space a contact lives in: [`Vec2`] for disks, [`Vec3`] for spheres.
+//!
+//! The contact kinematics and the force law ([`crate::contact`]) are written once over
+//! [`SpaceVector`] and monomorphised for each dimension, so disks pay only 2D arithmetic while
+//! spheres and disks share one implementation of every law. Angular quantities (angular
+//! velocity, torque) are [`SpaceVector::Angular`]: a vector in 3D, the scalar `z` component in
+//! 2D (a disk turns about the normal of its plane only).
+
+use crate::vec3::{Vec3, rotate_about, rotate_minimal};
+use serde::{Deserialize, Serialize};
+use std::fmt::Debug;
+use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub, SubAssign};
+
+/// A vector of the contact space (positions, velocities, forces) with the operations the
+/// contact kinematics and laws need.
+pub trait SpaceVector:
+    Copy
+    + PartialEq
+    + Default
+    + Debug
+    + Send
+    + Sync
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Neg<Output = Self>
+    + Mul<f64, Output = Self>
+    + Div<f64, Output = Self>
+    + AddAssign
+    + SubAssign
+{
+    /// Angular velocity or torque: a vector in 3D, the out-of-plane component in 2D.
+    type Angular: Copy
+        + PartialEq
+        + Default
+        + Debug
+        + Send
+        + Sync
+        + Add<Output = Self::Angular>
+        + AddAssign
+        + Neg<Output = Self::Angular>
+        + Mul<f64, Output = Self::Angular>;
+
+    /// The zero vector.
+    const ZERO: Self;
+    /// The unit vector along `x` (the normal of two coincident centres).
+    const UNIT_X: Self;
+
+    /// Dot product.
+    fn dot(self, o: Self) -> f64;
+
+    /// Squared Euclidean norm.
+    #[inline]
+    fn norm_squared(self) -> f64 {
+        self.dot(self)
+    }
+
+    /// Euclidean norm.
+    #[inline]
+    fn norm(self) -> f64 {
+        self.norm_squared().sqrt()
+    }
+
+    /// Velocity of a point at lever arm `r` on a body turning at `omega`: `ω × r`.
+    fn angular_cross(omega: Self::Angular, r: Self) -> Self;
+
+    /// Moment of the force `f` acting at lever arm `r`: `r × f`.
+    fn moment(r: Self, f: Self) -> Self::Angular;
+
+    /// Component of an angular quantity along the unit vector `n`: `ω·n` (0 in 2D, where every
+    /// angular quantity is normal to the plane that holds `n`).
+    fn angular_along(omega: Self::Angular, n: Self) -> f64;
+
+    /// Carries a tangential vector with the contact frame: the minimal rotation from the unit
+    /// vector `from` onto the unit vector `to`, then the rotation by `twist` about `to`
+    /// (radians; always 0 in 2D). Antiparallel normals leave `v` unchanged.
+    fn rotate_with_frame(v: Self, from: Self, to: Self, twist: f64) -> Self;
+}
+
+impl SpaceVector for Vec3 {
+    type Angular = Vec3;
+    const ZERO: Self = Vec3::ZERO;
+    const UNIT_X: Self = Vec3::new(1.0, 0.0, 0.0);
+
+    #[inline]
+    fn dot(self, o: Self) -> f64 {
+        Vec3::dot(self, o)
+    }
+
+    #[inline]
+    fn angular_cross(omega: Vec3, r: Self) -> Self {
+        omega.cross(r)
+    }
+
+    #[inline]
+    fn moment(r: Self, f: Self) -> Vec3 {
+        r.cross(f)
+    }
+
+    #[inline]
+    fn angular_along(omega: Vec3, n: Self) -> f64 {
+        omega.dot(n)
+    }
+
+    #[inline]
+    fn rotate_with_frame(v: Self, from: Self, to: Self, twist: f64) -> Self {
+        rotate_about(rotate_minimal(v, from, to), to, twist)
+    }
+}
+
+/// A vector in ℝ² (disks: positions, velocities, forces in the `xy` plane).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Vec2 {
+    /// x component.
+    pub x: f64,
+    /// y component.
+    pub y: f64,
+}
+
+impl Vec2 {
+    /// The zero vector.
+    pub const ZERO: Self = Self::new(0.0, 0.0);
+
+    /// A vector from its components.
+    #[inline]
+    pub const fn new(x: f64, y: f64) -> Self {
+        Self { x, y }
+    }
+
+    /// Dot product.
+    #[inline]
+    pub fn dot(self, o: Self) -> f64 {
+        self.x * o.x + self.y * o.y
+    }
+
+    /// The scalar cross product `self × o` (the `z` component of the 3D cross product).
+    #[inline]
+    pub fn perp_dot(self, o: Self) -> f64 {
+        self.x * o.y - self.y * o.x
+    }
+
+    /// Squared Euclidean norm.
+    #[inline]
+    pub fn norm_squared(self) -> f64 {
+        self.dot(self)
+    }
+
+    /// Euclidean norm.
+    #[inline]
+    pub fn norm(self) -> f64 {
+        self.norm_squared().sqrt()
+    }
+
+    /// True when both components are finite.
+    #[inline]
+    pub fn is_finite(self) -> bool {
+        self.x.is_finite() && self.y.is_finite()
+    }
+
+    /// The in-plane part of a 3D vector.
+    #[inline]
+    pub fn from_xy(v: Vec3) -> Self {
+        Self::new(v.x, v.y)
+    }
+
+    /// This vector in the `z = 0` plane of 3D space.
+    #[inline]
+    pub fn to_vec3(self) -> Vec3 {
+        Vec3::new(self.x, self.y, 0.0)
+    }
+}
+
+impl SpaceVector for Vec2 {
+    type Angular = f64;
+    const ZERO: Self = Vec2::ZERO;
+    const UNIT_X: Self = Vec2::new(1.0, 0.0);
+
+    #[inline]
+    fn dot(self, o: Self) -> f64 {
+        Vec2::dot(self, o)
+    }
+
+    #[inline]
+    fn angular_cross(omega: f64, r: Self) -> Self {
+        Self::new(-omega * r.y, omega * r.x)
+    }
+
+    #[inline]
+    fn moment(r: Self, f: Self) -> f64 {
+        r.perp_dot(f)
+    }
+
+    #[inline]
+    fn angular_along(_omega: f64, _n: Self) -> f64 {
+        0.0
+    }
+
+    /// In the plane the minimal rotation is the rotation by the angle from `from` to `to`,
+    /// `cos = from·to`, `sin = from × to` (exact for unit vectors, no trigonometric call); the
+    /// twist about an in-plane normal is zero for disks.
+    #[inline]
+    fn rotate_with_frame(v: Self, from: Self, to: Self, _twist: f64) -> Self {
+        let c = from.dot(to);
+        if c <= -1.0 + 1e-12 {
+            return v;
+        }
+        let s = from.perp_dot(to);
+        Self::new(c * v.x - s * v.y, s * v.x + c * v.y)
+    }
+}
+
+impl Add for Vec2 {
+    type Output = Self;
+    #[inline]
+    fn add(self, o: Self) -> Self {
+        Self::new(self.x + o.x, self.y + o.y)
+    }
+}
+
+impl Sub for Vec2 {
+    type Output = Self;
+    #[inline]
+    fn sub(self, o: Self) -> Self {
+        Self::new(self.x - o.x, self.y - o.y)
+    }
+}
+
+impl Neg for Vec2 {
+    type Output = Self;
+    #[inline]
+    fn neg(self) -> Self {
+        Self::new(-self.x, -self.y)
+    }
+}
+
+impl Mul<f64> for Vec2 {
+    type Output = Self;
+    #[inline]
+    fn mul(self, s: f64) -> Self {
+        Self::new(self.x * s, self.y * s)
+    }
+}
+
+impl Div<f64> for Vec2 {
+    type Output = Self;
+    #[inline]
+    fn div(self, s: f64) -> Self {
+        Self::new(self.x / s, self.y / s)
+    }
+}
+
+impl AddAssign for Vec2 {
+    #[inline]
+    fn add_assign(&mut self, o: Self) {
+        *self = *self + o;
+    }
+}
+
+impl SubAssign for Vec2 {
+    #[inline]
+    fn sub_assign(&mut self, o: Self) {
+        *self = *self - o;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn v2(x: f64, y: f64) -> Vec2 {
+        Vec2::new(x, y)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// The 2D operations are the 3D ones restricted to the plane: ω × r, r × f and the
+        /// frame rotation of an in-plane vector about `z` agree to round-off.
+        #[test]
+        fn planar_operations_match_3d_in_the_plane(
+            ax in -3.0..3.0_f64, ay in -3.0..3.0_f64,
+            bx in -3.0..3.0_f64, by in -3.0..3.0_f64,
+            w in -5.0..5.0_f64,
+            from_angle in -3.0..3.0_f64, turn in -1.0..1.0_f64,
+        ) {
+            let (a, b) = (v2(ax, ay), v2(bx, by));
+            let wa = Vec2::angular_cross(w, a);
+            let wa3 = Vec3::angular_cross(Vec3::new(0.0, 0.0, w), a.to_vec3());
+            prop_assert!((wa.to_vec3() - wa3).norm() <= 1e-14 * (1.0 + wa3.norm()));
+            let m = Vec2::moment(a, b);
+            let m3 = Vec3::moment(a.to_vec3(), b.to_vec3());
+            prop_assert!((m - m3.z).abs() <= 1e-14 * (1.0 + m3.norm()));
+            prop_assert!(m3.x == 0.0 && m3.y == 0.0);
+            let from = v2(from_angle.cos(), from_angle.sin());
+            let to = v2((from_angle + turn).cos(), (from_angle + turn).sin());
+            let r = Vec2::rotate_with_frame(a, from, to, 0.0);
+            let r3 = Vec3::rotate_with_frame(a.to_vec3(), from.to_vec3(), to.to_vec3(), 0.0);
+            prop_assert!((r.to_vec3() - r3).norm() <= 1e-13 * (1.0 + a.norm()));
+            // A rotation keeps the length and maps `from` onto `to`.
+            prop_assert!((r.norm() - a.norm()).abs() <= 1e-13 * (1.0 + a.norm()));
+            let f = Vec2::rotate_with_frame(from, from, to, 0.0);
+            prop_assert!((f - to).norm() <= 1e-14);
+        }
+    }
+}
