@@ -41,6 +41,18 @@ impl PeriodicContacts {
         self.pair.is_empty()
     }
 
+    /// Heap memory of the list \[bytes\].
+    pub fn heap_bytes(&self) -> usize {
+        fn cap<T>(v: &Vec<T>) -> usize {
+            v.capacity() * std::mem::size_of::<T>()
+        }
+        cap(&self.pair)
+            + cap(&self.shift)
+            + cap(&self.history)
+            + cap(&self.force_on_b)
+            + cap(&self.branch)
+    }
+
     /// Number of pairs that carried force at the last evaluation (or hold an intact bond).
     pub fn active_count(&self) -> usize {
         self.force_on_b
@@ -64,6 +76,22 @@ impl PeriodicContacts {
         self.history.clear();
         self.force_on_b.clear();
         self.branch.clear();
+    }
+
+    /// Makes room for at least `count` pairs plus 1/8 headroom (exactly, not doubling), so
+    /// that the list can grow a little between rebuilds without reallocating.
+    pub(crate) fn reserve_for(&mut self, count: usize) {
+        fn room<T>(v: &mut Vec<T>, target: usize) {
+            if v.capacity() < target {
+                v.reserve_exact(target - v.len());
+            }
+        }
+        let target = count + count / 8 + 8;
+        room(&mut self.pair, target);
+        room(&mut self.shift, target);
+        room(&mut self.history, target);
+        room(&mut self.force_on_b, target);
+        room(&mut self.branch, target);
     }
 
     pub(crate) fn push(&mut self, pair: [u32; 2], shift: [i32; 2], history: ContactHistory<Vec2>) {
@@ -162,11 +190,7 @@ impl RveState {
             + cap(&d.temperature)
             + cap(&d.force)
             + cap(&d.torque)
-            + cap(&c.pair)
-            + cap(&c.shift)
-            + cap(&c.history)
-            + cap(&c.force_on_b)
-            + cap(&c.branch)
+            + c.heap_bytes()
             + cap(&a.reduced_position)
             + cap(&a.radius)
     }
