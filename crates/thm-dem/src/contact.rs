@@ -107,7 +107,7 @@ impl<V: SpaceVector> ContactKinematics<V> {
     ) -> Self {
         let distance = branch.norm();
         let normal = if distance > 0.0 {
-            branch / distance
+            branch * (1.0 / distance)
         } else {
             V::UNIT_X
         };
@@ -244,8 +244,7 @@ pub fn rotate_shear_force<V: SpaceVector>(
     normal: V,
     twist: f64,
 ) -> V {
-    let rotated = V::rotate_with_frame(shear_force, old_normal, normal, twist);
-    rotated - normal * rotated.dot(normal)
+    V::carry_tangential(shear_force, old_normal, normal, twist)
 }
 
 /// The force law shared by every material (A-Eqs. 1–6, B-Eqs. 35–36, 38–39):

@@ -74,6 +74,15 @@ pub trait SpaceVector:
     /// vector `from` onto the unit vector `to`, then the rotation by `twist` about `to`
     /// (radians; always 0 in 2D). Antiparallel normals leave `v` unchanged.
     fn rotate_with_frame(v: Self, from: Self, to: Self, twist: f64) -> Self;
+
+    /// Carries a vector of the tangent plane of `from` into the tangent plane of `to`:
+    /// [`SpaceVector::rotate_with_frame`], then the projection onto the new tangent plane
+    /// (which removes round-off only).
+    #[inline]
+    fn carry_tangential(v: Self, from: Self, to: Self, twist: f64) -> Self {
+        let rotated = Self::rotate_with_frame(v, from, to, twist);
+        rotated - to * rotated.dot(to)
+    }
 }
 
 impl SpaceVector for Vec3 {
@@ -206,6 +215,18 @@ impl SpaceVector for Vec2 {
         let s = from.perp_dot(to);
         Self::new(c * v.x - s * v.y, s * v.x + c * v.y)
     }
+
+    /// In the plane a tangent "plane" is a line: the component of `v` along the old tangent
+    /// `t = (−n_y, n_x)` of `from` is carried onto the new tangent of `to`. Equal to rotating
+    /// and projecting up to round-off (for a `v` tangential to `from`, as the shear force is).
+    #[inline]
+    fn carry_tangential(v: Self, from: Self, to: Self, _twist: f64) -> Self {
+        if from.dot(to) <= -1.0 + 1e-12 {
+            return v - to * v.dot(to);
+        }
+        let along = from.perp_dot(v);
+        Self::new(-to.y * along, to.x * along)
+    }
 }
 
 impl Add for Vec2 {
@@ -300,6 +321,13 @@ mod tests {
             prop_assert!((r.norm() - a.norm()).abs() <= 1e-13 * (1.0 + a.norm()));
             let f = Vec2::rotate_with_frame(from, from, to, 0.0);
             prop_assert!((f - to).norm() <= 1e-14);
+            // Carrying a tangential vector: the 2D shortcut equals rotate-and-project in 3D.
+            let tangential = v2(-from.y, from.x) * ax;
+            let carried = Vec2::carry_tangential(tangential, from, to, 0.0);
+            let carried3 =
+                Vec3::carry_tangential(tangential.to_vec3(), from.to_vec3(), to.to_vec3(), 0.0);
+            prop_assert!((carried.to_vec3() - carried3).norm() <= 1e-13 * (1.0 + ax.abs()));
+            prop_assert!(carried.dot(to).abs() <= 1e-14 * (1.0 + ax.abs()));
         }
     }
 }
