@@ -111,6 +111,7 @@ pub mod neighbour;
 pub mod packing;
 pub mod state;
 pub mod stepper;
+pub mod validate;
 pub mod vec3;
 pub mod vector;
 pub mod verification;
@@ -123,5 +124,6 @@ pub use contact::{
 pub use error::DemError;
 pub use state::{BondBreak, ContactList, DemState, Kinematics, ParticleState, Wall};
 pub use stepper::{Stepper, StepperConfig, StepperParams, critical_time_step};
+pub use validate::OutOfRange;
 pub use vec3::Vec3;
 pub use vector::{SpaceVector, Vec2};
