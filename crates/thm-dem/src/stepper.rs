@@ -128,8 +128,8 @@ impl<L: ContactLaw> Stepper<L> {
     /// One time step. Runs in the current rayon pool; the result does not depend on its size.
     pub fn step(&mut self, state: &mut DemState) -> Result<(), DemError> {
         self.update_neighbours(state)?;
-        self.compute_contact_forces(state);
-        self.collect_events(state);
+        let any_broke = self.compute_contact_forces(state);
+        self.collect_events(state, any_broke);
         self.gather_forces(state);
         self.integrate(state)?;
         let dt = self.config.params.time_step;
@@ -267,7 +267,9 @@ impl<L: ContactLaw> Stepper<L> {
     }
 
     /// Stage 2: forces of all particle–particle and particle–wall contacts, in parallel.
-    pub fn compute_contact_forces(&self, state: &mut DemState) {
+    /// Returns whether a bond broke in this step (an OR over contacts: the same for any
+    /// thread count), so that stage 3 scans the responses only then.
+    pub fn compute_contact_forces(&self, state: &mut DemState) -> bool {
         let dt = self.config.params.time_step;
         let law = &self.law;
         let DemState {
@@ -291,7 +293,7 @@ impl<L: ContactLaw> Stepper<L> {
                         if r.active || r.broke.is_some() {
                             *r = ContactResponse::default();
                         }
-                        return;
+                        return false;
                     }
                 }
                 let kin = ContactKinematics::from_pair(
@@ -309,23 +311,26 @@ impl<L: ContactLaw> Stepper<L> {
                     temperature: 0.5 * (p.temperature[a] + p.temperature[b]),
                 };
                 *r = law.respond(&input, &kin, h);
+                r.broke.is_some()
             };
-        if contacts.len() >= PAR_THRESHOLD {
+        let any_broke = if contacts.len() >= PAR_THRESHOLD {
             contacts
                 .history
                 .par_iter_mut()
                 .zip(contacts.response.par_iter_mut())
                 .zip(contacts.pair.par_iter())
                 .with_min_len(MIN_PAR_LEN)
-                .for_each(particle_contact);
+                .map(particle_contact)
+                .reduce(|| false, |x, y| x | y)
         } else {
             contacts
                 .history
                 .iter_mut()
                 .zip(contacts.response.iter_mut())
                 .zip(contacts.pair.iter())
-                .for_each(particle_contact);
-        }
+                .map(particle_contact)
+                .fold(false, |x, y| x | y)
+        };
         let walls: &[crate::state::Wall] = walls;
         let wall_contact =
             |((h, r), pair): ((&mut ContactHistory, &mut ContactResponse), &[u32; 2])| {
@@ -364,16 +369,12 @@ impl<L: ContactLaw> Stepper<L> {
                 .zip(wall_contacts.pair.iter())
                 .for_each(wall_contact);
         }
+        any_broke
     }
 
-    /// Stage 3: broken-bond events (in contact order) and the forces on the walls.
-    pub fn collect_events(&self, state: &mut DemState) {
-        let broke = |r: &ContactResponse| r.broke.is_some();
-        let any_broke = if state.contacts.len() >= PAR_THRESHOLD {
-            state.contacts.response.par_iter().any(broke)
-        } else {
-            state.contacts.response.iter().any(broke)
-        };
+    /// Stage 3: broken-bond events (in contact order; the contacts are scanned only when
+    /// stage 2 reported a break) and the forces on the walls.
+    pub fn collect_events(&self, state: &mut DemState, any_broke: bool) {
         if any_broke {
             for (pair, r) in state.contacts.pair.iter().zip(&state.contacts.response) {
                 if let Some(mode) = r.broke {
@@ -478,6 +479,8 @@ impl<L: ContactLaw> Stepper<L> {
         } = &mut state.particles;
         let planar = kinematics.is_planar();
         let n = position.len();
+        // Advances particle `i`; returns `i` when its state became non-finite, else `usize::MAX`,
+        // so the first bad particle is the minimum (the same for any thread count).
         let advance = |(i, ((x, v), w)): (usize, ((&mut Vec3, &mut Vec3), &mut Vec3))| {
             if !fixed[i] {
                 let inv_m = 1.0 / mass[i];
@@ -493,36 +496,33 @@ impl<L: ContactLaw> Stepper<L> {
                 }
             }
             *x += *v * dt;
+            if x.is_finite() && v.is_finite() && w.is_finite() {
+                usize::MAX
+            } else {
+                i
+            }
         };
-        let finite =
-            |((x, v), w): ((&Vec3, &Vec3), &Vec3)| x.is_finite() && v.is_finite() && w.is_finite();
-        let bad = if n >= PAR_THRESHOLD {
+        let first_bad = if n >= PAR_THRESHOLD {
             position
                 .par_iter_mut()
                 .zip(velocity.par_iter_mut())
                 .zip(angular_velocity.par_iter_mut())
                 .enumerate()
                 .with_min_len(MIN_PAR_LEN)
-                .for_each(advance);
-            position
-                .par_iter()
-                .zip(velocity.par_iter())
-                .zip(angular_velocity.par_iter())
-                .with_min_len(MIN_PAR_LEN)
-                .position_first(|item| !finite(item))
+                .map(advance)
+                .min()
+                .unwrap_or(usize::MAX)
         } else {
             position
                 .iter_mut()
                 .zip(velocity.iter_mut())
                 .zip(angular_velocity.iter_mut())
                 .enumerate()
-                .for_each(advance);
-            position
-                .iter()
-                .zip(velocity.iter())
-                .zip(angular_velocity.iter())
-                .position(|item| !finite(item))
+                .map(advance)
+                .min()
+                .unwrap_or(usize::MAX)
         };
+        let bad = (first_bad != usize::MAX).then_some(first_bad);
         match bad {
             Some(index) => Err(DemError::NonFinite {
                 quantity: "position or velocity",
@@ -549,15 +549,11 @@ pub fn cundall_damping(f: Vec3, v: Vec3, dt_over_m: f64, alpha: f64) -> Vec3 {
     if alpha == 0.0 {
         return f;
     }
+    // Without branches: the sign of `F_k v_k` of a vibrating particle is unpredictable.
     let damp = |fk: f64, vk: f64| {
         let s = fk * (vk + 0.5 * dt_over_m * fk);
-        if s > 0.0 {
-            fk * (1.0 - alpha)
-        } else if s < 0.0 {
-            fk * (1.0 + alpha)
-        } else {
-            fk
-        }
+        let sign = f64::from(u8::from(s > 0.0)) - f64::from(u8::from(s < 0.0));
+        fk * (1.0 - alpha * sign)
     };
     Vec3::new(damp(f.x, v.x), damp(f.y, v.y), damp(f.z, v.z))
 }
