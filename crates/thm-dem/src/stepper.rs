@@ -3,11 +3,14 @@
 //! 1. [`Stepper::update_neighbours`]: Verlet-list check; cell-grid search and merge of the
 //!    contact histories when a particle (or wall) moved more than half the skin;
 //! 2. [`Stepper::compute_contact_forces`]: every contact in parallel, each writing only its own
-//!    history and response;
-//! 3. [`Stepper::collect_events`]: broken-bond events and wall forces, serially in contact order;
+//!    history and response, reading the particles from one compact record each (copied in
+//!    parallel at the start of the stage); reports whether a bond broke (a boolean OR);
+//! 3. [`Stepper::collect_events`]: broken-bond events (the contacts are scanned only when a
+//!    bond broke) and wall forces, serially in contact order;
 //! 4. [`Stepper::gather_forces`]: every particle sums its own contacts in contact-index order,
 //!    plus external force and gravity (no atomics: the same bits for any thread count);
-//! 5. [`Stepper::integrate`]: Cundall's non-viscous damping (A-Eq. 7) and leapfrog;
+//! 5. [`Stepper::integrate`]: Cundall's non-viscous damping (A-Eq. 7) and leapfrog, with the
+//!    finiteness check in the same pass (the first bad particle is a minimum over indices);
 //! 6. walls move at their prescribed velocity.
 
 use crate::contact::{
