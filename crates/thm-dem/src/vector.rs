@@ -286,7 +286,77 @@ impl SubAssign for Vec2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contact::{
+        ContactHistory, ContactKinematics, ContactLaw, LinearSpringParams, PairInput,
+    };
     use proptest::prelude::*;
+
+    /// One law, two spaces: a disk B rolling and sliding around a disk A, evaluated by the
+    /// 2D instance and by the 3D instance in the `z = 0` plane, gives the same forces,
+    /// torques, friction work and shear history to round-off over a thousand steps (the
+    /// normal turns by about a radian, the contact slides part of the time).
+    #[test]
+    fn disk_contact_in_2d_equals_the_3d_law_in_the_plane() {
+        let law = LinearSpringParams {
+            normal_stiffness: 1e6,
+            tangential_stiffness: 8e5,
+            friction_coefficient: 0.3,
+            thermal_bond: None,
+        }
+        .validate()
+        .unwrap();
+        let (ra, rb, dt) = (1e-3, 0.7e-3, 1e-6);
+        let pair = PairInput {
+            radius_a: ra,
+            radius_b: rb,
+            temperature: 293.0,
+        };
+        let mut h2 = ContactHistory::<Vec2>::UNBONDED;
+        let mut h3 = ContactHistory::<Vec3>::UNBONDED;
+        let (mut slid, mut max_force) = (0, 0.0_f64);
+        for k in 0..1000 {
+            let t = k as f64 * dt;
+            // B rolls around A (the normal turns by one radian over the run) at a varying
+            // overlap, with a spin mismatch that makes it stick and slip in turn.
+            let orbit = 1000.0;
+            let angle = orbit * t;
+            let distance = ra + rb - 2e-6 * (1.0 + 0.5 * (3000.0 * t).sin());
+            let branch = Vec2::new(angle.cos(), angle.sin()) * distance;
+            let velocity = Vec2::new(-angle.sin(), angle.cos()) * (orbit * distance);
+            let lever_b = rb - 0.5 * (ra + rb - distance);
+            let rolling = orbit * distance / lever_b;
+            let wa = 2.0 * (5000.0 * t).sin();
+            let wb = rolling * (1.0 + 0.005 * (20_000.0 * t).sin());
+            let k2 = ContactKinematics::<Vec2>::from_pair(branch, velocity, wa, wb, ra, rb, dt);
+            let k3 = ContactKinematics::<Vec3>::from_pair(
+                branch.to_vec3(),
+                velocity.to_vec3(),
+                Vec3::new(0.0, 0.0, wa),
+                Vec3::new(0.0, 0.0, wb),
+                ra,
+                rb,
+                dt,
+            );
+            let r2 = law.respond(&pair, &k2, &mut h2);
+            let r3 = law.respond(&pair, &k3, &mut h3);
+            let scale = r3.force_on_b.norm().max(1e-12);
+            max_force = max_force.max(scale);
+            assert!((r2.force_on_b.to_vec3() - r3.force_on_b).norm() <= 1e-12 * scale);
+            assert!((h2.shear_force.to_vec3() - h3.shear_force).norm() <= 1e-12 * scale);
+            let torque_scale = scale * ra;
+            assert!((r2.torque_on_a - r3.torque_on_a.z).abs() <= 1e-12 * torque_scale);
+            assert!((r2.torque_on_b - r3.torque_on_b.z).abs() <= 1e-12 * torque_scale);
+            assert!(r3.torque_on_a.x == 0.0 && r3.torque_on_a.y == 0.0);
+            let work_scale = scale * scale / 8e5;
+            assert!((r2.friction_work - r3.friction_work).abs() <= 1e-12 * work_scale);
+            if r3.friction_work > 0.0 {
+                slid += 1;
+            }
+        }
+        // The comparison covered sliding and sticking steps under a real load.
+        assert!(slid >= 50 && slid <= 950, "sliding steps: {slid}");
+        assert!(max_force > 1.0, "{max_force}");
+    }
 
     fn v2(x: f64, y: f64) -> Vec2 {
         Vec2::new(x, y)
