@@ -354,7 +354,7 @@ mod tests {
             }
         }
         // The comparison covered sliding and sticking steps under a real load.
-        assert!(slid >= 50 && slid <= 950, "sliding steps: {slid}");
+        assert!((50..=950).contains(&slid), "sliding steps: {slid}");
         assert!(max_force > 1.0, "{max_force}");
     }
 
