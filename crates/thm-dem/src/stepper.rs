@@ -587,11 +587,12 @@ pub fn cundall_damping(f: Vec3, v: Vec3, dt_over_m: f64, alpha: f64) -> Vec3 {
     if alpha == 0.0 {
         return f;
     }
-    // Without branches: the sign of `F_k v_k` of a vibrating particle is unpredictable.
+    // A select rather than a branch: the sign of `F_k v_k` of a vibrating particle is
+    // unpredictable. `1 − copysign(α, s)` is `1 − α` or `1 + α`, the same bits as before.
     let damp = |fk: f64, vk: f64| {
         let s = fk * (vk + 0.5 * dt_over_m * fk);
-        let sign = f64::from(u8::from(s > 0.0)) - f64::from(u8::from(s < 0.0));
-        fk * (1.0 - alpha * sign)
+        let damped = fk * (1.0 - alpha.copysign(s));
+        if s > 0.0 || s < 0.0 { damped } else { fk }
     };
     Vec3::new(damp(f.x, v.x), damp(f.y, v.y), damp(f.z, v.z))
 }

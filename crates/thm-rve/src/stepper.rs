@@ -415,9 +415,13 @@ fn local_damping(f: f64, v: f64, dt_m: f64, alpha: f64) -> f64 {
         return f;
     }
     let v_mid = v + 0.5 * f * dt_m;
-    // sgn(v) without a branch: the sign of a vibrating disk's velocity is unpredictable.
-    let sign = f64::from(u8::from(v_mid > 0.0)) - f64::from(u8::from(v_mid < 0.0));
-    f - alpha * f.abs() * sign
+    // A select rather than a branch: the sign of a vibrating disk's velocity is unpredictable.
+    let damped = f - (alpha * f.abs()).copysign(v_mid);
+    if v_mid > 0.0 || v_mid < 0.0 {
+        damped
+    } else {
+        f
+    }
 }
 
 /// The first disk with a non-finite velocity or position (after an integration that produced
