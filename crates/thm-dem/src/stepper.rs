@@ -592,7 +592,7 @@ pub fn cundall_damping(f: Vec3, v: Vec3, dt_over_m: f64, alpha: f64) -> Vec3 {
     let damp = |fk: f64, vk: f64| {
         let s = fk * (vk + 0.5 * dt_over_m * fk);
         let damped = fk * (1.0 - alpha.copysign(s));
-        if s > 0.0 || s < 0.0 { damped } else { fk }
+        if s != 0.0 { damped } else { fk }
     };
     Vec3::new(damp(f.x, v.x), damp(f.y, v.y), damp(f.z, v.z))
 }
