@@ -417,11 +417,7 @@ fn local_damping(f: f64, v: f64, dt_m: f64, alpha: f64) -> f64 {
     let v_mid = v + 0.5 * f * dt_m;
     // A select rather than a branch: the sign of a vibrating disk's velocity is unpredictable.
     let damped = f - (alpha * f.abs()).copysign(v_mid);
-    if v_mid > 0.0 || v_mid < 0.0 {
-        damped
-    } else {
-        f
-    }
+    if v_mid != 0.0 { damped } else { f }
 }
 
 /// The first disk with a non-finite velocity or position (after an integration that produced
