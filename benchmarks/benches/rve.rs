@@ -47,10 +47,12 @@ fn bench_batch(c: &mut Criterion) {
         pool.install(|| batch.respond(&mut states, &loads).unwrap());
         if threads == 1 {
             let bytes: usize = states.iter().map(|s| s.heap_bytes()).sum();
+            let per_disk = |b: usize| b as f64 / (count * disks) as f64;
             eprintln!(
-                "rve_batch: {count} RVEs x {disks} disks, {} contacts listed per RVE, heap {:.0} bytes per disk",
+                "rve_batch: {count} RVEs x {disks} disks, {} contacts listed per RVE, heap {:.0} bytes per disk in the states + {:.0} in the batch scratch",
                 states[0].contacts.len(),
-                bytes as f64 / (count * disks) as f64
+                per_disk(bytes),
+                per_disk(batch.heap_bytes())
             );
         }
         group.bench_function(format!("{count}x{disks}/threads={threads}"), |b| {

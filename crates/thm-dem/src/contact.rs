@@ -5,9 +5,14 @@
 //! Everything here is a pure function of its arguments, so a periodic cell can call it with its
 //! own branch vectors and velocities (the image shift and the homogeneous velocity field are
 //! the caller's business).
+//!
+//! Kinematics, history, response and the force law are generic over the space
+//! ([`SpaceVector`]): one implementation, monomorphised for spheres ([`Vec3`], the default type
+//! parameter) and for disks ([`crate::Vec2`], 2D arithmetic only).
 
 use crate::error::{DemError, check_positive, check_range};
-use crate::vec3::{Vec3, rotate_about, rotate_minimal};
+use crate::vec3::Vec3;
+use crate::vector::SpaceVector;
 use serde::{Deserialize, Serialize};
 
 /// Whether a contact carries a cohesive bond.
@@ -33,11 +38,11 @@ pub enum BreakMode {
 
 /// The history a contact carries from step to step.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-pub struct ContactHistory {
+pub struct ContactHistory<V = Vec3> {
     /// Shear force on particle B \[N\], in the tangent plane of `normal`.
-    pub shear_force: Vec3,
+    pub shear_force: V,
     /// Contact normal (A → B) at the previous step; zero for a contact not yet evaluated.
-    pub normal: Vec3,
+    pub normal: V,
     /// Penetration at which the normal force is zero \[m\]: the creation penetration of a
     /// bond (stress-free at its creation distance; negative across a gap), 0 for a contact
     /// that was never bonded.
@@ -46,11 +51,11 @@ pub struct ContactHistory {
     pub bond: BondState,
 }
 
-impl ContactHistory {
+impl<V: SpaceVector> ContactHistory<V> {
     /// A fresh, unbonded contact.
     pub const UNBONDED: Self = Self {
-        shear_force: Vec3::ZERO,
-        normal: Vec3::ZERO,
+        shear_force: V::ZERO,
+        normal: V::ZERO,
         reference_penetration: 0.0,
         bond: BondState::None,
     };
@@ -67,24 +72,24 @@ impl ContactHistory {
 
 /// Kinematics of one contact over one step (what the law needs from the geometry).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ContactKinematics {
+pub struct ContactKinematics<V = Vec3> {
     /// Unit normal from A to B.
-    pub normal: Vec3,
+    pub normal: V,
     /// Geometric penetration `R_A + R_B − |x_B − x_A|` \[m\] (negative across a gap).
     pub penetration: f64,
     /// Tangential relative displacement of B with respect to A at the contact point over the
     /// step \[m\] (`Δ X_s` of A-Eq. 2, `δu^t` of B-Eq. 35b).
-    pub shear_increment: Vec3,
+    pub shear_increment: V,
     /// Rotation of the contact frame about the normal over the step \[rad\]:
-    /// `½ (ω_A + ω_B)·n Δt`.
+    /// `½ (ω_A + ω_B)·n Δt` (0 for disks).
     pub twist_angle: f64,
     /// Lever arm from the centre of A to the contact point \[m\].
-    pub lever_a: Vec3,
+    pub lever_a: V,
     /// Lever arm from the centre of B to the contact point \[m\].
-    pub lever_b: Vec3,
+    pub lever_b: V,
 }
 
-impl ContactKinematics {
+impl<V: SpaceVector> ContactKinematics<V> {
     /// Kinematics of a pair from the branch vector `x_B − x_A` (a periodic cell passes the
     /// vector to the nearest image), the centre velocity of B relative to A, the angular
     /// velocities and the radii. The contact point lies in the middle of the overlap, at
@@ -92,31 +97,33 @@ impl ContactKinematics {
     #[allow(clippy::too_many_arguments)]
     #[inline]
     pub fn from_pair(
-        branch: Vec3,
-        relative_velocity: Vec3,
-        angular_velocity_a: Vec3,
-        angular_velocity_b: Vec3,
+        branch: V,
+        relative_velocity: V,
+        angular_velocity_a: V::Angular,
+        angular_velocity_b: V::Angular,
         radius_a: f64,
         radius_b: f64,
         dt: f64,
     ) -> Self {
         let distance = branch.norm();
         let normal = if distance > 0.0 {
-            branch / distance
+            branch * (1.0 / distance)
         } else {
-            Vec3::new(1.0, 0.0, 0.0)
+            V::UNIT_X
         };
         let penetration = radius_a + radius_b - distance;
         let lever_a = normal * (radius_a - 0.5 * penetration);
         let lever_b = normal * -(radius_b - 0.5 * penetration);
-        let v_rel = relative_velocity + angular_velocity_b.cross(lever_b)
-            - angular_velocity_a.cross(lever_a);
+        let v_rel = relative_velocity + V::angular_cross(angular_velocity_b, lever_b)
+            - V::angular_cross(angular_velocity_a, lever_a);
         let v_t = v_rel - normal * v_rel.dot(normal);
         Self {
             normal,
             penetration,
             shear_increment: v_t * dt,
-            twist_angle: 0.5 * (angular_velocity_a + angular_velocity_b).dot(normal) * dt,
+            twist_angle: 0.5
+                * V::angular_along(angular_velocity_a + angular_velocity_b, normal)
+                * dt,
             lever_a,
             lever_b,
         }
@@ -128,28 +135,28 @@ impl ContactKinematics {
     #[allow(clippy::too_many_arguments)]
     #[inline]
     pub fn from_wall(
-        position: Vec3,
-        velocity: Vec3,
-        angular_velocity: Vec3,
+        position: V,
+        velocity: V,
+        angular_velocity: V::Angular,
         radius: f64,
-        wall_point: Vec3,
-        wall_normal: Vec3,
-        wall_velocity: Vec3,
+        wall_point: V,
+        wall_normal: V,
+        wall_velocity: V,
         dt: f64,
     ) -> Self {
         let gap = (position - wall_point).dot(wall_normal);
         let normal = -wall_normal;
         let penetration = radius - gap;
         let lever_a = normal * (radius - 0.5 * penetration);
-        let v_rel = wall_velocity - velocity - angular_velocity.cross(lever_a);
+        let v_rel = wall_velocity - velocity - V::angular_cross(angular_velocity, lever_a);
         let v_t = v_rel - normal * v_rel.dot(normal);
         Self {
             normal,
             penetration,
             shear_increment: v_t * dt,
-            twist_angle: 0.5 * angular_velocity.dot(normal) * dt,
+            twist_angle: 0.5 * V::angular_along(angular_velocity, normal) * dt,
             lever_a,
-            lever_b: Vec3::ZERO,
+            lever_b: V::ZERO,
         }
     }
 }
@@ -187,13 +194,13 @@ pub struct ContactProperties {
 
 /// The result of one contact update.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-pub struct ContactResponse {
+pub struct ContactResponse<V: SpaceVector = Vec3> {
     /// Total force on B \[N\] (A receives its negative).
-    pub force_on_b: Vec3,
+    pub force_on_b: V,
     /// Torque on A about its centre \[N m\].
-    pub torque_on_a: Vec3,
+    pub torque_on_a: V::Angular,
     /// Torque on B about its centre \[N m\].
-    pub torque_on_b: Vec3,
+    pub torque_on_b: V::Angular,
     /// Normal force \[N\], compression positive, tension negative (intact bonds only).
     pub normal_force: f64,
     /// Contact normal stress \[Pa\], compression positive (`F_n / R²`, the same `R` as the bond
@@ -209,19 +216,20 @@ pub struct ContactResponse {
 
 /// A contact law: stiffnesses and strengths of a pair (one small seam). The force update
 /// ([`update_contact`]) is shared by every law; a law with a different force update overrides
-/// [`ContactLaw::respond`].
+/// [`ContactLaw::respond`]. Both are generic over the space, so one law serves spheres and
+/// disks, monomorphised (no dynamic dispatch in the contact loop).
 pub trait ContactLaw: Sync + Send + std::fmt::Debug {
     /// Stiffnesses and strengths of the pair.
     fn properties(&self, pair: &PairInput) -> ContactProperties;
 
     /// Updates the history of one contact and returns its forces.
     #[inline]
-    fn respond(
+    fn respond<V: SpaceVector>(
         &self,
         pair: &PairInput,
-        kinematics: &ContactKinematics,
-        history: &mut ContactHistory,
-    ) -> ContactResponse {
+        kinematics: &ContactKinematics<V>,
+        history: &mut ContactHistory<V>,
+    ) -> ContactResponse<V> {
         update_contact(&self.properties(pair), kinematics, history)
     }
 }
@@ -230,13 +238,13 @@ pub trait ContactLaw: Sync + Send + std::fmt::Debug {
 /// normal to the new one, then the twist about the new normal, then a projection onto the new
 /// tangent plane (removes round-off only; the rotation is exact).
 #[inline]
-pub fn rotate_shear_force(shear_force: Vec3, old_normal: Vec3, normal: Vec3, twist: f64) -> Vec3 {
-    let rotated = rotate_about(
-        rotate_minimal(shear_force, old_normal, normal),
-        normal,
-        twist,
-    );
-    rotated - normal * rotated.dot(normal)
+pub fn rotate_shear_force<V: SpaceVector>(
+    shear_force: V,
+    old_normal: V,
+    normal: V,
+    twist: f64,
+) -> V {
+    V::carry_tangential(shear_force, old_normal, normal, twist)
 }
 
 /// The force law shared by every material (A-Eqs. 1–6, B-Eqs. 35–36, 38–39):
@@ -252,13 +260,13 @@ pub fn rotate_shear_force(shear_force: Vec3, old_normal: Vec3, normal: Vec3, twi
 ///    dissipates `|F_s| (|F_s,trial| − |F_s|)/K_s` (B-Eq. 32 with the sliding part of the
 ///    tangential velocity).
 #[inline]
-pub fn update_contact(
+pub fn update_contact<V: SpaceVector>(
     props: &ContactProperties,
-    kin: &ContactKinematics,
-    history: &mut ContactHistory,
-) -> ContactResponse {
+    kin: &ContactKinematics<V>,
+    history: &mut ContactHistory<V>,
+) -> ContactResponse<V> {
     let n = kin.normal;
-    let old_normal = if history.normal == Vec3::ZERO {
+    let old_normal = if history.normal == V::ZERO {
         n
     } else {
         history.normal
@@ -266,7 +274,7 @@ pub fn update_contact(
     history.normal = n;
     let overlap = kin.penetration - history.reference_penetration;
     if history.bond != BondState::Intact && overlap <= 0.0 {
-        history.shear_force = Vec3::ZERO;
+        history.shear_force = V::ZERO;
         return ContactResponse::default();
     }
     let rotated = rotate_shear_force(history.shear_force, old_normal, n, kin.twist_angle);
@@ -300,7 +308,7 @@ pub fn update_contact(
             shear = if trial > 0.0 {
                 shear * (limit / trial)
             } else {
-                Vec3::ZERO
+                V::ZERO
             };
             if props.shear_stiffness > 0.0 {
                 friction_work = limit * (trial - limit) / props.shear_stiffness;
@@ -311,13 +319,13 @@ pub fn update_contact(
     let force_on_b = n * normal_force + shear;
     ContactResponse {
         force_on_b,
-        torque_on_a: kin.lever_a.cross(-force_on_b),
-        torque_on_b: kin.lever_b.cross(force_on_b),
+        torque_on_a: V::moment(kin.lever_a, -force_on_b),
+        torque_on_b: V::moment(kin.lever_b, force_on_b),
         normal_force,
         normal_stress: normal_force / props.stress_area,
         friction_work,
         broke,
-        active: normal_force != 0.0 || history.bond == BondState::Intact || shear != Vec3::ZERO,
+        active: normal_force != 0.0 || history.bond == BondState::Intact || shear != V::ZERO,
     }
 }
 

@@ -76,34 +76,4 @@ pub enum DemError {
     },
 }
 
-/// Checks that `value` is finite and within `[lo, hi]`.
-pub(crate) fn check_range(
-    field: &'static str,
-    value: f64,
-    lo: f64,
-    hi: f64,
-    allowed: &'static str,
-) -> Result<f64, DemError> {
-    if value.is_finite() && value >= lo && value <= hi {
-        Ok(value)
-    } else {
-        Err(DemError::InvalidParameter {
-            field,
-            value,
-            allowed,
-        })
-    }
-}
-
-/// Checks that `value` is finite and strictly positive.
-pub(crate) fn check_positive(field: &'static str, value: f64) -> Result<f64, DemError> {
-    if value.is_finite() && value > 0.0 {
-        Ok(value)
-    } else {
-        Err(DemError::InvalidParameter {
-            field,
-            value,
-            allowed: "(0, ∞)",
-        })
-    }
-}
+pub(crate) use crate::validate::{check_positive, check_range};

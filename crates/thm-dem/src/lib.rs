@@ -3,7 +3,9 @@
 //! A deterministic, parallel discrete element method (DEM) for cohesive-frictional granular
 //! materials: spheres in 3D, spheres held in one plane (the single-layer specimens of
 //! Krzaczek, Nitka & Tejchman 2023, "paper A") and disks in 2D (the RVEs of Zhao, Zhao, Liang &
-//! Niu 2022, "paper B"). Every contact law has one implementation that serves all three.
+//! Niu 2022, "paper B"). Every contact law has one implementation that serves all three: the
+//! kinematics and the force law are written once over a [`SpaceVector`] and monomorphised for
+//! [`Vec3`] (spheres) and [`Vec2`] (disks, 2D arithmetic only; the periodic RVEs use it).
 //!
 //! It does **not** do fluid flow, heat conduction, meshing or periodic cells: it takes the
 //! external forces (fluid pressure and shear, A-Eqs. 52–54) and particle temperatures from the
@@ -90,6 +92,14 @@
 //! Small overlaps (`U/R` ≲ 0.1 at contacts that were never bonded), quasi-static or moderately
 //! dynamic loading, `Δt` below [`critical_time_step`]. Linear contact springs (no Hertz).
 //!
+//! In 2D the shear force is carried from the old tangent to the new one directly (its
+//! component along the old tangent `(−n_y, n_x)` is put on the new tangent); this equals the
+//! 3D rotation-and-projection to round-off (property test in [`vector`]). The twist about the
+//! normal is zero for disks.
+//!
+//! Input ranges are checked by [`validate`] (a structured [`OutOfRange`] that this crate's
+//! [`DemError`] and the crates built on it wrap).
+//!
 //! ## Structure and guarantees
 //!
 //! State ([`DemState`]: particles as struct of arrays, contact lists with history, walls,
@@ -111,7 +121,9 @@ pub mod neighbour;
 pub mod packing;
 pub mod state;
 pub mod stepper;
+pub mod validate;
 pub mod vec3;
+pub mod vector;
 pub mod verification;
 
 pub use contact::{
@@ -122,4 +134,6 @@ pub use contact::{
 pub use error::DemError;
 pub use state::{BondBreak, ContactList, DemState, Kinematics, ParticleState, Wall};
 pub use stepper::{Stepper, StepperConfig, StepperParams, critical_time_step};
+pub use validate::OutOfRange;
 pub use vec3::Vec3;
+pub use vector::{SpaceVector, Vec2};

@@ -95,34 +95,14 @@ pub enum RveError {
     Dem(#[from] thm_dem::DemError),
 }
 
-/// Checks that `value` is finite and within `[lo, hi]`.
-pub(crate) fn check_range(
-    field: &'static str,
-    value: f64,
-    lo: f64,
-    hi: f64,
-    allowed: &'static str,
-) -> Result<f64, RveError> {
-    if value.is_finite() && value >= lo && value <= hi {
-        Ok(value)
-    } else {
-        Err(RveError::InvalidParameter {
-            field,
-            value,
-            allowed,
-        })
+impl From<thm_dem::OutOfRange> for RveError {
+    fn from(e: thm_dem::OutOfRange) -> Self {
+        Self::InvalidParameter {
+            field: e.field,
+            value: e.value,
+            allowed: e.allowed,
+        }
     }
 }
 
-/// Checks that `value` is finite and strictly positive.
-pub(crate) fn check_positive(field: &'static str, value: f64) -> Result<f64, RveError> {
-    if value.is_finite() && value > 0.0 {
-        Ok(value)
-    } else {
-        Err(RveError::InvalidParameter {
-            field,
-            value,
-            allowed: "(0, ∞)",
-        })
-    }
-}
+pub(crate) use thm_dem::validate::{check_positive, check_range};

@@ -1,7 +1,7 @@
 //! A 2 × 2 matrix of `f64` (cell matrix, velocity gradient, stress, conductivity).
 
 use serde::{Deserialize, Serialize};
-use thm_dem::Vec3;
+use thm_dem::{Vec2, Vec3};
 
 /// A 2 × 2 matrix, row-major: `m.0[i][j]` is row `i`, column `j`.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
@@ -134,6 +134,19 @@ impl Mat2 {
             m[1][0] * v.x + m[1][1] * v.y,
             0.0,
         )
+    }
+
+    /// `M · v` for a plane vector.
+    #[inline]
+    pub fn apply_vec2(&self, v: Vec2) -> Vec2 {
+        let m = &self.0;
+        Vec2::new(m[0][0] * v.x + m[0][1] * v.y, m[1][0] * v.x + m[1][1] * v.y)
+    }
+
+    /// The outer product `a ⊗ b` of two plane vectors.
+    #[inline]
+    pub fn outer_vec2(a: Vec2, b: Vec2) -> Self {
+        Self::new(a.x * b.x, a.x * b.y, a.y * b.x, a.y * b.y)
     }
 
     /// Column `j` as an in-plane vector.

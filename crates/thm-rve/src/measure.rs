@@ -4,7 +4,7 @@
 use crate::mat2::Mat2;
 use crate::params::RveParams;
 use crate::state::RveState;
-use thm_dem::{BondState, Vec3};
+use thm_dem::{BondState, Vec2};
 
 /// Homogenised stress of B-Eq. 49 \[Pa\], compression positive:
 /// `σ = (1/V) Σ_c f^c ⊗ b^c + (1/V) Σ_p m_p v_f^p ⊗ v_f^p` with `f^c` the force on `b` from
@@ -28,7 +28,7 @@ pub fn contact_stress(state: &RveState, thickness: f64) -> Mat2 {
     let c = &state.contacts;
     let mut m = Mat2::ZERO;
     for (f, b) in c.force_on_b.iter().zip(&c.branch) {
-        m = m.add_scaled(&Mat2::outer(*f, *b), 1.0);
+        m = m.add_scaled(&Mat2::outer_vec2(*f, *b), 1.0);
     }
     m.scale(1.0 / state.volume(thickness))
 }
@@ -37,7 +37,7 @@ pub fn contact_stress(state: &RveState, thickness: f64) -> Mat2 {
 /// intact bond.
 #[inline]
 fn conducts(state: &RveState, c: usize) -> bool {
-    state.contacts.force_on_b[c] != Vec3::ZERO
+    state.contacts.force_on_b[c] != Vec2::ZERO
         || state.contacts.history[c].bond == BondState::Intact
 }
 
@@ -55,7 +55,10 @@ pub fn conductivity(state: &RveState, params: &RveParams) -> Mat2 {
         let r = state.contacts.branch[c];
         let l = r.norm();
         if l > 0.0 {
-            k = k.add_scaled(&Mat2::outer(r, r), 1.0 / (params.thermal_resistance * l));
+            k = k.add_scaled(
+                &Mat2::outer_vec2(r, r),
+                1.0 / (params.thermal_resistance * l),
+            );
         }
     }
     k.scale(1.0 / state.volume(params.thickness))
@@ -124,7 +127,7 @@ pub fn elastic_energy(state: &RveState, params: &RveParams) -> f64 {
     let mut e = 0.0;
     for i in 0..c.len() {
         let f = c.force_on_b[i];
-        if f == Vec3::ZERO {
+        if f == Vec2::ZERO {
             continue;
         }
         let ft = c.history[i].shear_force;
@@ -145,7 +148,7 @@ pub fn unbalanced_force_ratio(state: &RveState) -> f64 {
     let mean_unbalanced = d.force.iter().map(|f| f.norm()).sum::<f64>() / n;
     let (mut sum, mut count) = (0.0, 0usize);
     for f in &state.contacts.force_on_b {
-        if *f != Vec3::ZERO {
+        if *f != Vec2::ZERO {
             sum += f.norm();
             count += 1;
         }

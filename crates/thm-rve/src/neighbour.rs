@@ -25,6 +25,18 @@ pub struct PeriodicGrid {
 }
 
 impl PeriodicGrid {
+    /// Heap memory of the buffers \[bytes\].
+    pub fn heap_bytes(&self) -> usize {
+        fn cap<T>(v: &Vec<T>) -> usize {
+            v.capacity() * std::mem::size_of::<T>()
+        }
+        cap(&self.bin_of)
+            + cap(&self.bin_start)
+            + cap(&self.sorted)
+            + cap(&self.cursor)
+            + cap(&self.reduced)
+    }
+
     /// All pairs whose periodic gap is below `skin`, sorted by pair. `position` must lie in the
     /// cell (reduced coordinates in `[0, 1)`). Fails with [`RveError::CellTooSmall`] when the
     /// cell is narrower than twice the reach (a pair could then touch two images).

@@ -6,7 +6,7 @@ use crate::cell::PeriodicCell;
 use crate::error::RveError;
 use crate::mat2::Mat2;
 use serde::{Deserialize, Serialize};
-use thm_dem::{BondState, ContactHistory, Kinematics, ParticleState, Vec3};
+use thm_dem::{BondState, ContactHistory, Kinematics, ParticleState, Vec2, Vec3};
 
 /// Contacts (and near pairs) of a periodic packing, sorted by pair, with their history and
 /// the force and branch vector of the last force evaluation.
@@ -20,12 +20,12 @@ pub struct PeriodicContacts {
     pub pair: Vec<[u32; 2]>,
     /// Integer image shift of `b` per pair.
     pub shift: Vec<[i32; 2]>,
-    /// History per pair (shear force, previous normal, bond state).
-    pub history: Vec<ContactHistory>,
+    /// History per pair (shear force, previous normal, bond state), in the plane.
+    pub history: Vec<ContactHistory<Vec2>>,
     /// Force on `b` from `a` at the last evaluation \[N\] (zero when not touching).
-    pub force_on_b: Vec<Vec3>,
+    pub force_on_b: Vec<Vec2>,
     /// Branch vector `a → image of b` at the last evaluation \[m\].
-    pub branch: Vec<Vec3>,
+    pub branch: Vec<Vec2>,
 }
 
 impl PeriodicContacts {
@@ -41,12 +41,24 @@ impl PeriodicContacts {
         self.pair.is_empty()
     }
 
+    /// Heap memory of the list \[bytes\].
+    pub fn heap_bytes(&self) -> usize {
+        fn cap<T>(v: &Vec<T>) -> usize {
+            v.capacity() * std::mem::size_of::<T>()
+        }
+        cap(&self.pair)
+            + cap(&self.shift)
+            + cap(&self.history)
+            + cap(&self.force_on_b)
+            + cap(&self.branch)
+    }
+
     /// Number of pairs that carried force at the last evaluation (or hold an intact bond).
     pub fn active_count(&self) -> usize {
         self.force_on_b
             .iter()
             .zip(&self.history)
-            .filter(|(f, h)| **f != Vec3::ZERO || h.bond == BondState::Intact)
+            .filter(|(f, h)| **f != Vec2::ZERO || h.bond == BondState::Intact)
             .count()
     }
 
@@ -66,12 +78,28 @@ impl PeriodicContacts {
         self.branch.clear();
     }
 
-    pub(crate) fn push(&mut self, pair: [u32; 2], shift: [i32; 2], history: ContactHistory) {
+    /// Makes room for at least `count` pairs plus 1/8 headroom (exactly, not doubling), so
+    /// that the list can grow a little between rebuilds without reallocating.
+    pub(crate) fn reserve_for(&mut self, count: usize) {
+        fn room<T>(v: &mut Vec<T>, target: usize) {
+            if v.capacity() < target {
+                v.reserve_exact(target - v.len());
+            }
+        }
+        let target = count + count / 8 + 8;
+        room(&mut self.pair, target);
+        room(&mut self.shift, target);
+        room(&mut self.history, target);
+        room(&mut self.force_on_b, target);
+        room(&mut self.branch, target);
+    }
+
+    pub(crate) fn push(&mut self, pair: [u32; 2], shift: [i32; 2], history: ContactHistory<Vec2>) {
         self.pair.push(pair);
         self.shift.push(shift);
         self.history.push(history);
-        self.force_on_b.push(Vec3::ZERO);
-        self.branch.push(Vec3::ZERO);
+        self.force_on_b.push(Vec2::ZERO);
+        self.branch.push(Vec2::ZERO);
     }
 }
 
@@ -162,11 +190,7 @@ impl RveState {
             + cap(&d.temperature)
             + cap(&d.force)
             + cap(&d.torque)
-            + cap(&c.pair)
-            + cap(&c.shift)
-            + cap(&c.history)
-            + cap(&c.force_on_b)
-            + cap(&c.branch)
+            + c.heap_bytes()
             + cap(&a.reduced_position)
             + cap(&a.radius)
     }
@@ -221,7 +245,7 @@ impl RveState {
             .iter_mut()
             .zip(&self.contacts.force_on_b)
         {
-            if *f != Vec3::ZERO && h.bond == BondState::None {
+            if *f != Vec2::ZERO && h.bond == BondState::None {
                 h.bond = BondState::Intact;
                 n += 1;
             }
@@ -254,8 +278,8 @@ impl RveState {
             *v = q.apply(*v);
         }
         for h in &mut self.contacts.history {
-            h.shear_force = q.apply(h.shear_force);
-            h.normal = q.apply(h.normal);
+            h.shear_force = q.apply_vec2(h.shear_force);
+            h.normal = q.apply_vec2(h.normal);
         }
         for (f, b) in self
             .contacts
@@ -263,8 +287,8 @@ impl RveState {
             .iter_mut()
             .zip(self.contacts.branch.iter_mut())
         {
-            *f = q.apply(*f);
-            *b = q.apply(*b);
+            *f = q.apply_vec2(*f);
+            *b = q.apply_vec2(*b);
         }
         self.contact_moment = q.mul(&self.contact_moment).mul(&q.transpose());
         self.anchor.skin = 0.0;

@@ -22,7 +22,7 @@ use crate::neighbour::{Candidate, PeriodicGrid};
 use crate::params::RveConfig;
 use crate::state::{PeriodicContacts, RveState};
 use serde::{Deserialize, Serialize};
-use thm_dem::{ContactHistory, ContactKinematics, ContactLaw, PairInput, Vec3};
+use thm_dem::{ContactHistory, ContactKinematics, ContactLaw, PairInput, Vec2, Vec3};
 
 /// What the material point imposes on its RVE for one macroscopic step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -39,7 +39,7 @@ pub struct RveLoad {
 }
 
 /// What the RVE returns to its material point.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct RveResponse {
     /// Homogenised stress σ of B-Eq. 49 \[Pa\], compression positive (the paper's sign).
     pub stress: Mat2,
@@ -50,7 +50,7 @@ pub struct RveResponse {
 }
 
 /// Advances an [`RveState`]. Holds the configuration and scratch buffers only, so one stepper
-/// can advance any state (a batch keeps one per worker).
+/// can advance any state (a batch keeps one per chunk of RVEs).
 #[derive(Debug, Clone)]
 pub struct RveStepper {
     config: RveConfig,
@@ -58,6 +58,8 @@ pub struct RveStepper {
     candidates: Vec<Candidate>,
     merged: PeriodicContacts,
     temperature: Vec<f64>,
+    disk: Vec<DiskRecord>,
+    load: Vec<DiskLoad>,
 }
 
 impl RveStepper {
@@ -69,7 +71,22 @@ impl RveStepper {
             candidates: Vec::new(),
             merged: PeriodicContacts::default(),
             temperature: Vec::new(),
+            disk: Vec::new(),
+            load: Vec::new(),
         }
+    }
+
+    /// Heap memory of the scratch buffers \[bytes\].
+    pub fn heap_bytes(&self) -> usize {
+        fn cap<T>(v: &Vec<T>) -> usize {
+            v.capacity() * std::mem::size_of::<T>()
+        }
+        self.grid.heap_bytes()
+            + cap(&self.candidates)
+            + self.merged.heap_bytes()
+            + cap(&self.temperature)
+            + cap(&self.disk)
+            + cap(&self.load)
     }
 
     /// The configuration.
@@ -129,6 +146,7 @@ impl RveStepper {
         // Carry the histories over, pair by pair (both lists are sorted).
         let old = &state.contacts;
         self.merged.clear();
+        self.merged.reserve_for(self.candidates.len());
         let mut k = 0;
         for &(pair, shift) in &self.candidates {
             while k < old.len() && old.pair[k] < pair {
@@ -176,73 +194,115 @@ impl RveStepper {
         let mut max_disp2 = 0.0_f64;
         let mut max_growth = 0.0_f64;
         let mut r_max = 0.0_f64;
-        for i in 0..n {
-            let d = h.apply(state.cell.to_reduced(state.disks.position[i]) - a.reduced_position[i]);
+        // Fluctuating displacement since the build: `H (X − X₀) = x − H X₀`.
+        for (((x, x0), r), r0) in state
+            .disks
+            .position
+            .iter()
+            .zip(&a.reduced_position)
+            .zip(&state.disks.radius)
+            .zip(&a.radius)
+        {
+            let d = Vec2::from_xy(*x) - h.apply_vec2(Vec2::from_xy(*x0));
             max_disp2 = max_disp2.max(d.norm_squared());
-            max_growth = max_growth.max(state.disks.radius[i] - a.radius[i]);
-            r_max = r_max.max(a.radius[i]);
+            max_growth = max_growth.max(r - r0);
+            r_max = r_max.max(*r0);
         }
         let used = 2.0 * max_disp2.sqrt() + e * (2.0 * r_max + a.skin) + 2.0 * max_growth;
         !used.is_finite() || used >= a.skin
     }
 
-    /// Stage 2: contact forces at the present configuration. Clears and fills the disk
-    /// force and torque arrays, the per-contact force and branch, and the contact moment
-    /// `Σ f ⊗ b`. Returns the friction work of the step (B-Eq. 32) \[J\].
-    pub fn compute_contact_forces(&self, state: &mut RveState, l: &Mat2, dt: f64) -> f64 {
+    /// Stage 2: contact forces at the present configuration. Fills the disk force and torque
+    /// arrays, the per-contact force and branch, and the contact moment `Σ f ⊗ b`. Returns the
+    /// friction work of the step (B-Eq. 32) \[J\].
+    ///
+    /// The disks are first copied into one compact record each (centre, velocity, spin,
+    /// radius, temperature), so a contact reads two records instead of ten arrays, and the
+    /// forces are summed in list order into compact accumulators.
+    pub fn compute_contact_forces(&mut self, state: &mut RveState, l: &Mat2, dt: f64) -> f64 {
         let law = self.config.law();
         let disks = &mut state.disks;
-        for f in &mut disks.force {
-            *f = Vec3::ZERO;
-        }
-        for t in &mut disks.torque {
-            *t = Vec3::ZERO;
-        }
+        self.disk.clear();
+        self.disk.extend(
+            disks
+                .position
+                .iter()
+                .zip(&disks.velocity)
+                .zip(&disks.angular_velocity)
+                .zip(&disks.radius)
+                .zip(&disks.temperature)
+                .map(|((((x, v), w), &radius), &temperature)| DiskRecord {
+                    position: Vec2::from_xy(*x),
+                    velocity: Vec2::from_xy(*v),
+                    spin: w.z,
+                    radius,
+                    temperature,
+                }),
+        );
+        self.load.clear();
+        self.load.resize(disks.len(), DiskLoad::default());
+        let (disk, load) = (&self.disk, &mut self.load);
         let contacts = &mut state.contacts;
-        let cell = &state.cell;
+        let h = *state.cell.matrix();
         let mut moment = Mat2::ZERO;
         let mut heat = 0.0;
-        for c in 0..contacts.pair.len() {
-            let [a, b] = contacts.pair[c];
-            let (a, b) = (a as usize, b as usize);
-            let branch =
-                disks.position[b] + cell.lattice_vector(contacts.shift[c]) - disks.position[a];
-            contacts.branch[c] = branch;
-            let history = &mut contacts.history[c];
-            let (ra, rb) = (disks.radius[a], disks.radius[b]);
-            let reach = ra + rb;
+        for ((((pair, shift), history), force_on_b), branch_out) in contacts
+            .pair
+            .iter()
+            .zip(&contacts.shift)
+            .zip(contacts.history.iter_mut())
+            .zip(contacts.force_on_b.iter_mut())
+            .zip(contacts.branch.iter_mut())
+        {
+            let (a, b) = (pair[0] as usize, pair[1] as usize);
+            let (da, db) = (&disk[a], &disk[b]);
+            let lattice = h.apply_vec2(Vec2::new(f64::from(shift[0]), f64::from(shift[1])));
+            let branch = db.position + lattice - da.position;
+            *branch_out = branch;
+            let reach = da.radius + db.radius;
             if history.bond != thm_dem::BondState::Intact && branch.norm_squared() >= reach * reach
             {
                 // Apart and unbonded: the law would return zero and clear the shear force.
-                history.shear_force = Vec3::ZERO;
-                history.normal = Vec3::ZERO;
-                contacts.force_on_b[c] = Vec3::ZERO;
+                history.shear_force = Vec2::ZERO;
+                history.normal = Vec2::ZERO;
+                *force_on_b = Vec2::ZERO;
                 continue;
             }
-            let relative_velocity = disks.velocity[b] - disks.velocity[a] + l.apply(branch);
-            let kinematics = ContactKinematics::from_pair(
+            let relative_velocity = db.velocity - da.velocity + l.apply_vec2(branch);
+            let kinematics = ContactKinematics::<Vec2>::from_pair(
                 branch,
                 relative_velocity,
-                disks.angular_velocity[a],
-                disks.angular_velocity[b],
-                ra,
-                rb,
+                da.spin,
+                db.spin,
+                da.radius,
+                db.radius,
                 dt,
             );
             let pair = PairInput {
-                radius_a: ra,
-                radius_b: rb,
-                temperature: 0.5 * (disks.temperature[a] + disks.temperature[b]),
+                radius_a: da.radius,
+                radius_b: db.radius,
+                temperature: 0.5 * (da.temperature + db.temperature),
             };
             let r = law.respond(&pair, &kinematics, history);
-            contacts.force_on_b[c] = r.force_on_b;
-            disks.force[b] += r.force_on_b;
-            disks.force[a] -= r.force_on_b;
-            disks.torque[a] += r.torque_on_a;
-            disks.torque[b] += r.torque_on_b;
-            let m = Mat2::outer(r.force_on_b, branch);
-            moment = moment.add_scaled(&m, 1.0);
+            let f = r.force_on_b;
+            *force_on_b = f;
+            let la = &mut load[a];
+            la.force -= f;
+            la.torque += r.torque_on_a;
+            let lb = &mut load[b];
+            lb.force += f;
+            lb.torque += r.torque_on_b;
+            moment = moment.add_scaled(&Mat2::outer_vec2(f, branch), 1.0);
             heat += r.friction_work;
+        }
+        for ((f, t), ld) in disks
+            .force
+            .iter_mut()
+            .zip(disks.torque.iter_mut())
+            .zip(load.iter())
+        {
+            *f = ld.force.to_vec3();
+            *t = Vec3::new(0.0, 0.0, ld.torque);
         }
         state.contact_moment = moment;
         heat
@@ -254,38 +314,34 @@ impl RveStepper {
     pub fn integrate(&self, state: &mut RveState, l: &Mat2, dt: f64) -> Result<(), RveError> {
         let alpha = self.config.params().local_damping;
         let disks = &mut state.disks;
-        for i in 0..disks.position.len() {
-            let (m, inertia) = (disks.mass[i], disks.inertia[i]);
-            let mut f = disks.force[i];
-            let mut t = disks.torque[i].z;
-            let v = disks.velocity[i];
-            let w = disks.angular_velocity[i].z;
-            if alpha > 0.0 {
-                f.x -= alpha * f.x.abs() * sign(v.x + 0.5 * f.x * dt / m);
-                f.y -= alpha * f.y.abs() * sign(v.y + 0.5 * f.y * dt / m);
-                t -= alpha * t.abs() * sign(w + 0.5 * t * dt / inertia);
-            }
-            let v = Vec3::new(v.x + f.x / m * dt, v.y + f.y / m * dt, 0.0);
-            let w = w + t / inertia * dt;
-            let x = disks.position[i];
-            let x_new = x + (v + l.apply(x)) * dt;
-            if !(v.is_finite() && w.is_finite()) {
-                return Err(RveError::NonFinite {
-                    quantity: "fluctuating velocity",
-                    index: i,
-                    step: state.step,
-                });
-            }
-            if !x_new.is_finite() {
-                return Err(RveError::NonFinite {
-                    quantity: "position",
-                    index: i,
-                    step: state.step,
-                });
-            }
-            disks.velocity[i] = v;
-            disks.angular_velocity[i] = Vec3::new(0.0, 0.0, w);
-            disks.position[i] = x_new;
+        let mut finite = true;
+        for ((((((x, v), w), &m), &inertia), f), t) in disks
+            .position
+            .iter_mut()
+            .zip(disks.velocity.iter_mut())
+            .zip(disks.angular_velocity.iter_mut())
+            .zip(&disks.mass)
+            .zip(&disks.inertia)
+            .zip(&disks.force)
+            .zip(&disks.torque)
+        {
+            let (dt_m, dt_i) = (dt / m, dt / inertia);
+            let (fx, fy, tz) = (
+                local_damping(f.x, v.x, dt_m, alpha),
+                local_damping(f.y, v.y, dt_m, alpha),
+                local_damping(t.z, w.z, dt_i, alpha),
+            );
+            let v_new = Vec2::new(v.x + fx * dt_m, v.y + fy * dt_m);
+            let w_new = w.z + tz * dt_i;
+            let x_old = Vec2::from_xy(*x);
+            let x_new = x_old + (v_new + l.apply_vec2(x_old)) * dt;
+            finite &= v_new.is_finite() && w_new.is_finite() && x_new.is_finite();
+            *v = v_new.to_vec3();
+            *w = Vec3::new(0.0, 0.0, w_new);
+            *x = x_new.to_vec3();
+        }
+        if !finite {
+            return Err(first_non_finite(state));
         }
         state.cell.deform(l, dt)
     }
@@ -351,13 +407,57 @@ impl RveStepper {
     }
 }
 
+/// Cundall's local non-viscous damping of one component: `F − α |F| sgn(v)` with the mid-step
+/// velocity estimate `v + ½ Δt F / m` (`dt_m` = Δt / m).
 #[inline]
-fn sign(v: f64) -> f64 {
-    if v > 0.0 {
-        1.0
-    } else if v < 0.0 {
-        -1.0
-    } else {
-        0.0
+fn local_damping(f: f64, v: f64, dt_m: f64, alpha: f64) -> f64 {
+    if alpha == 0.0 {
+        return f;
     }
+    let v_mid = v + 0.5 * f * dt_m;
+    // A select rather than a branch: the sign of a vibrating disk's velocity is unpredictable.
+    let damped = f - (alpha * f.abs()).copysign(v_mid);
+    if v_mid != 0.0 { damped } else { f }
+}
+
+/// The first disk with a non-finite velocity or position (after an integration that produced
+/// one).
+fn first_non_finite(state: &RveState) -> RveError {
+    let d = &state.disks;
+    for i in 0..d.len() {
+        let quantity = if !(d.velocity[i].is_finite() && d.angular_velocity[i].is_finite()) {
+            "fluctuating velocity"
+        } else if !d.position[i].is_finite() {
+            "position"
+        } else {
+            continue;
+        };
+        return RveError::NonFinite {
+            quantity,
+            index: i,
+            step: state.step,
+        };
+    }
+    RveError::NonFinite {
+        quantity: "position",
+        index: 0,
+        step: state.step,
+    }
+}
+
+/// What a contact needs of a disk, in one record.
+#[derive(Debug, Clone, Copy, Default)]
+struct DiskRecord {
+    position: Vec2,
+    velocity: Vec2,
+    spin: f64,
+    radius: f64,
+    temperature: f64,
+}
+
+/// Force and torque summed over a disk's contacts.
+#[derive(Debug, Clone, Copy, Default)]
+struct DiskLoad {
+    force: Vec2,
+    torque: f64,
 }
