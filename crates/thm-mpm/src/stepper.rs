@@ -604,8 +604,14 @@ impl Mpm {
                         n.heat_content += wx * rmct;
                         n.force[0] -= gx * fxg + wx * fxw;
                         n.force[1] -= gx * fyg + wx * fyw;
-                        if loaded {
-                            let w = wx * wy;
+                    }
+                }
+                if loaded {
+                    for b in 0..3 {
+                        let start = first + b * row_len;
+                        let row = &mut nodes[start..start + 3];
+                        for (wx, n) in st.x.w.iter().zip(row) {
+                            let w = wx * st.y.w[b];
                             n.force[0] += w * f[0];
                             n.force[1] += w * f[1];
                             n.heat_load += w * q;
@@ -1041,8 +1047,13 @@ impl Mpm {
                                 });
                             }
                             *sig = r.stress;
-                            *q = r.heat_source;
-                            *k = r.conductivity;
+                            // Constant for most materials: stores skipped, lines stay clean.
+                            if *q != r.heat_source {
+                                *q = r.heat_source;
+                            }
+                            if *k != r.conductivity {
+                                *k = r.conductivity;
+                            }
                             None
                         }
                         Err(e) => Some(e),
