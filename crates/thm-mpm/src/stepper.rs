@@ -25,13 +25,16 @@ use crate::config::MpmConfig;
 use crate::error::MpmError;
 use crate::grid::Grid;
 use crate::material::{Constitutive, MaterialInput};
-use crate::points::{Mat2, MaterialPoints};
+use crate::points::{Mat2, MaterialPoints, Sym2};
 use crate::shape::Stencil;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Node rows per scatter strip (≥ 2 keeps same-colour strips disjoint).
 pub const STRIP_ROWS: usize = 2;
+
+/// Points per parallel work item of the point stages (gather, constitutive update).
+const POINT_CHUNK: usize = 512;
 
 /// Points per binning chunk: fixed, so that the binning does not depend on the thread count.
 const BIN_CHUNK: usize = 4096;
@@ -867,102 +870,118 @@ impl Mpm {
         let row_len = grid.nodes()[0];
         let gf = &self.grid_fields;
         let stencils = &self.stencils;
-        let bad = points
+        // Chunks of points in parallel, each a plain loop; per chunk the first point with a
+        // non-finite value and the first point outside the grid.
+        const C: usize = POINT_CHUNK;
+        let (non_finite, outside) = points
             .position
-            .par_iter_mut()
-            .zip(points.velocity.par_iter_mut())
-            .zip(points.temperature.par_iter_mut())
-            .zip(points.remapped_temperature.par_iter_mut())
+            .par_chunks_mut(C)
+            .zip(points.velocity.par_chunks_mut(C))
+            .zip(points.temperature.par_chunks_mut(C))
+            .zip(points.remapped_temperature.par_chunks_mut(C))
             .zip(
                 self.velocity_gradient
-                    .par_iter_mut()
-                    .zip(self.temperature_rate.par_iter_mut())
-                    .zip(stencils.par_iter().zip(points.half_size.par_iter())),
+                    .par_chunks_mut(C)
+                    .zip(self.temperature_rate.par_chunks_mut(C))
+                    .zip(stencils.par_chunks(C).zip(points.half_size.par_chunks(C))),
             )
             .enumerate()
-            .with_min_len(512)
-            .filter_map(|(i, ((((x, v), t), tr), ((l, tdot), (st, half))))| {
-                let mut v_old = [0.0; 2];
-                let mut v_new = [0.0; 2];
-                let mut rate = 0.0;
-                let mut t_new = 0.0;
-                let mut lg = [0.0; 4];
-                let origin = st.y.base * row_len + st.x.base;
-                for b in 0..3 {
-                    let start = origin + b * row_len;
-                    let vo = &gf.velocity_old[start..start + 3];
-                    let vn = &gf.velocity[start..start + 3];
-                    let tn = &gf.temperature[start..start + 3];
-                    let rn = &gf.temperature_rate[start..start + 3];
-                    // Row sums weighted by wx and by gx, then by wy and gy.
-                    let mut s = [0.0; 8];
-                    for a in 0..3 {
-                        let (wx, gx) = (st.x.w[a], st.x.g[a]);
-                        s[0] += wx * vo[a][0];
-                        s[1] += wx * vo[a][1];
-                        s[2] += wx * vn[a][0];
-                        s[3] += wx * vn[a][1];
-                        s[4] += wx * rn[a];
-                        s[5] += wx * tn[a];
-                        s[6] += gx * vn[a][0];
-                        s[7] += gx * vn[a][1];
+            .map(|(c, ((((x, v), t), tr), ((l, tdot), (st, half))))| {
+                let mut bad = (usize::MAX, usize::MAX);
+                let rows = x
+                    .iter_mut()
+                    .zip(v.iter_mut())
+                    .zip(t.iter_mut())
+                    .zip(tr.iter_mut())
+                    .zip(l.iter_mut().zip(tdot.iter_mut()).zip(st.iter().zip(half)));
+                for (j, ((((x, v), t), tr), ((l, tdot), (st, half)))) in rows.enumerate() {
+                    let mut v_old = [0.0; 2];
+                    let mut v_new = [0.0; 2];
+                    let mut rate = 0.0;
+                    let mut t_new = 0.0;
+                    let mut lg = [0.0; 4];
+                    let origin = st.y.base * row_len + st.x.base;
+                    for b in 0..3 {
+                        let start = origin + b * row_len;
+                        let vo = &gf.velocity_old[start..start + 3];
+                        let vn = &gf.velocity[start..start + 3];
+                        let tn = &gf.temperature[start..start + 3];
+                        let rn = &gf.temperature_rate[start..start + 3];
+                        // Row sums weighted by wx and by gx, then by wy and gy.
+                        let mut s = [0.0; 8];
+                        for a in 0..3 {
+                            let (wx, gx) = (st.x.w[a], st.x.g[a]);
+                            s[0] += wx * vo[a][0];
+                            s[1] += wx * vo[a][1];
+                            s[2] += wx * vn[a][0];
+                            s[3] += wx * vn[a][1];
+                            s[4] += wx * rn[a];
+                            s[5] += wx * tn[a];
+                            s[6] += gx * vn[a][0];
+                            s[7] += gx * vn[a][1];
+                        }
+                        let (wy, gy) = (st.y.w[b], st.y.g[b]);
+                        v_old[0] += wy * s[0];
+                        v_old[1] += wy * s[1];
+                        v_new[0] += wy * s[2];
+                        v_new[1] += wy * s[3];
+                        rate += wy * s[4];
+                        t_new += wy * s[5];
+                        lg[0] += wy * s[6];
+                        lg[1] += gy * s[2];
+                        lg[2] += wy * s[7];
+                        lg[3] += gy * s[3];
                     }
-                    let (wy, gy) = (st.y.w[b], st.y.g[b]);
-                    v_old[0] += wy * s[0];
-                    v_old[1] += wy * s[1];
-                    v_new[0] += wy * s[2];
-                    v_new[1] += wy * s[3];
-                    rate += wy * s[4];
-                    t_new += wy * s[5];
-                    lg[0] += wy * s[6];
-                    lg[1] += gy * s[2];
-                    lg[2] += wy * s[7];
-                    lg[3] += gy * s[3];
+                    let vp = *v;
+                    let v1 = [
+                        vp[0] + (v_new[0] - v_old[0]) - (a_pic + a_p) * vp[0]
+                            + (a_pic - a_g) * v_old[0],
+                        vp[1] + (v_new[1] - v_old[1]) - (a_pic + a_p) * vp[1]
+                            + (a_pic - a_g) * v_old[1],
+                    ];
+                    x[0] += dt * v_new[0] - 0.5 * dt * (v1[0] - vp[0]);
+                    x[1] += dt * v_new[1] - 0.5 * dt * (v1[1] - vp[1]);
+                    *v = v1;
+                    *t += rate * dt;
+                    *tr = t_new;
+                    *l = lg;
+                    *tdot = rate;
+                    let finite = x[0].is_finite()
+                        && x[1].is_finite()
+                        && v1[0].is_finite()
+                        && v1[1].is_finite()
+                        && t.is_finite();
+                    let inside = x[0] - half[0] >= lo[0]
+                        && x[0] + half[0] <= hi[0]
+                        && x[1] - half[1] >= lo[1]
+                        && x[1] + half[1] <= hi[1];
+                    let i = c * C + j;
+                    if !finite {
+                        bad.0 = bad.0.min(i);
+                    } else if !inside {
+                        bad.1 = bad.1.min(i);
+                    }
                 }
-                let vp = *v;
-                let v1 = [
-                    vp[0] + (v_new[0] - v_old[0]) - (a_pic + a_p) * vp[0]
-                        + (a_pic - a_g) * v_old[0],
-                    vp[1] + (v_new[1] - v_old[1]) - (a_pic + a_p) * vp[1]
-                        + (a_pic - a_g) * v_old[1],
-                ];
-                x[0] += dt * v_new[0] - 0.5 * dt * (v1[0] - vp[0]);
-                x[1] += dt * v_new[1] - 0.5 * dt * (v1[1] - vp[1]);
-                *v = v1;
-                *t += rate * dt;
-                *tr = t_new;
-                *l = lg;
-                *tdot = rate;
-                let finite = x[0].is_finite()
-                    && x[1].is_finite()
-                    && v1[0].is_finite()
-                    && v1[1].is_finite()
-                    && t.is_finite();
-                let inside = x[0] - half[0] >= lo[0]
-                    && x[0] + half[0] <= hi[0]
-                    && x[1] - half[1] >= lo[1]
-                    && x[1] + half[1] <= hi[1];
-                // Non-finite values are reported before a point outside the grid.
-                if !finite {
-                    Some((0u8, i))
-                } else if !inside {
-                    Some((1u8, i))
-                } else {
-                    None
-                }
+                bad
             })
-            .min();
-        match bad {
-            Some((0, i)) => Err(MpmError::NonFinite {
+            .reduce(
+                || (usize::MAX, usize::MAX),
+                |a, b| (a.0.min(b.0), a.1.min(b.1)),
+            );
+        // Non-finite values are reported before a point outside the grid.
+        if non_finite != usize::MAX {
+            return Err(MpmError::NonFinite {
                 quantity: "point position, velocity or temperature",
                 place: "material point",
-                index: i,
+                index: non_finite,
                 stage: "grid_to_particle",
                 step,
-            }),
-            Some((_, i)) => points.check_inside(grid, i, step + 1),
-            None => Ok(()),
+            });
         }
+        if outside != usize::MAX {
+            return points.check_inside(grid, outside, step + 1);
+        }
+        Ok(())
     }
 
     /// Stage: constitutive update. `F ← (I + L Δt) F`, `V = V_0 det F`, `ε += sym(L) Δt`, and
@@ -975,89 +994,118 @@ impl Mpm {
     ) -> Result<(), MpmError> {
         let pts = &mut state.points;
         let step = state.step;
+        let update = |i: usize,
+                      f: &mut Mat2,
+                      vol: &mut f64,
+                      eps: &mut Sym2,
+                      sig: &mut Sym2,
+                      q: &mut f64,
+                      k: &mut Sym2,
+                      ms: &mut M::PointState,
+                      (l, tdot, t, m, v0): (&Mat2, f64, f64, f64, f64)|
+         -> Result<(), MpmError> {
+            let fo = *f;
+            let a = [1.0 + l[0] * dt, l[1] * dt, l[2] * dt, 1.0 + l[3] * dt];
+            let fnew = [
+                a[0] * fo[0] + a[1] * fo[2],
+                a[0] * fo[1] + a[1] * fo[3],
+                a[2] * fo[0] + a[3] * fo[2],
+                a[2] * fo[1] + a[3] * fo[3],
+            ];
+            let det = fnew[0] * fnew[3] - fnew[1] * fnew[2];
+            if !(det > 0.0 && det.is_finite()) {
+                return Err(MpmError::InvalidPoint {
+                    index: i,
+                    field: "det F",
+                    value: det,
+                    allowed: "(0, inf)",
+                });
+            }
+            *f = fnew;
+            *vol = v0 * det;
+            eps[0] += l[0] * dt;
+            eps[1] += l[3] * dt;
+            eps[2] += 0.5 * (l[1] + l[2]) * dt;
+            let input = MaterialInput {
+                point: i,
+                velocity_gradient: *l,
+                deformation_gradient: fnew,
+                temperature: t,
+                temperature_rate: tdot,
+                stress: *sig,
+                density: m / *vol,
+                dt,
+            };
+            let r = material.respond(ms, &input)?;
+            if !(r.stress.iter().all(|s| s.is_finite())
+                && r.heat_source.is_finite()
+                && r.conductivity.iter().all(|c| c.is_finite()))
+            {
+                return Err(MpmError::NonFinite {
+                    quantity: "stress, heat source or conductivity",
+                    place: "material point",
+                    index: i,
+                    stage: "constitutive_update",
+                    step,
+                });
+            }
+            *sig = r.stress;
+            // Constant for most materials: stores skipped, lines stay clean.
+            if *q != r.heat_source {
+                *q = r.heat_source;
+            }
+            if *k != r.conductivity {
+                *k = r.conductivity;
+            }
+            Ok(())
+        };
+        // Chunks of points in parallel, each a plain loop that keeps its first error; the
+        // error of the lowest point index is reported.
+        const C: usize = POINT_CHUNK;
         let err = pts
             .deformation_gradient
-            .par_iter_mut()
-            .zip(pts.volume.par_iter_mut())
-            .zip(pts.strain.par_iter_mut())
-            .zip(pts.stress.par_iter_mut())
-            .zip(pts.heat_source.par_iter_mut())
-            .zip(pts.conductivity.par_iter_mut())
+            .par_chunks_mut(C)
+            .zip(pts.volume.par_chunks_mut(C))
+            .zip(pts.strain.par_chunks_mut(C))
+            .zip(pts.stress.par_chunks_mut(C))
+            .zip(pts.heat_source.par_chunks_mut(C))
+            .zip(pts.conductivity.par_chunks_mut(C))
             .zip(
                 state
                     .material
-                    .par_iter_mut()
-                    .zip(self.velocity_gradient.par_iter())
-                    .zip(self.temperature_rate.par_iter())
+                    .par_chunks_mut(C)
+                    .zip(self.velocity_gradient.par_chunks(C))
+                    .zip(self.temperature_rate.par_chunks(C))
                     .zip(
                         pts.remapped_temperature
-                            .par_iter()
-                            .zip(pts.mass.par_iter())
-                            .zip(pts.initial_volume.par_iter()),
+                            .par_chunks(C)
+                            .zip(pts.mass.par_chunks(C))
+                            .zip(pts.initial_volume.par_chunks(C)),
                     ),
             )
             .enumerate()
-            .with_min_len(256)
             .filter_map(
-                |(i, ((((((f, vol), eps), sig), q), k), (((ms, l), tdot), ((t, m), v0))))| {
-                    let fo = *f;
-                    let a = [1.0 + l[0] * dt, l[1] * dt, l[2] * dt, 1.0 + l[3] * dt];
-                    let fnew = [
-                        a[0] * fo[0] + a[1] * fo[2],
-                        a[0] * fo[1] + a[1] * fo[3],
-                        a[2] * fo[0] + a[3] * fo[2],
-                        a[2] * fo[1] + a[3] * fo[3],
-                    ];
-                    let det = fnew[0] * fnew[3] - fnew[1] * fnew[2];
-                    if !(det > 0.0 && det.is_finite()) {
-                        return Some(MpmError::InvalidPoint {
-                            index: i,
-                            field: "det F",
-                            value: det,
-                            allowed: "(0, inf)",
-                        });
-                    }
-                    *f = fnew;
-                    *vol = v0 * det;
-                    eps[0] += l[0] * dt;
-                    eps[1] += l[3] * dt;
-                    eps[2] += 0.5 * (l[1] + l[2]) * dt;
-                    let input = MaterialInput {
-                        point: i,
-                        velocity_gradient: *l,
-                        deformation_gradient: fnew,
-                        temperature: *t,
-                        temperature_rate: *tdot,
-                        stress: *sig,
-                        density: m / *vol,
-                        dt,
-                    };
-                    match material.respond(ms, &input) {
-                        Ok(r) => {
-                            if !(r.stress.iter().all(|s| s.is_finite())
-                                && r.heat_source.is_finite()
-                                && r.conductivity.iter().all(|c| c.is_finite()))
-                            {
-                                return Some(MpmError::NonFinite {
-                                    quantity: "stress, heat source or conductivity",
-                                    place: "material point",
-                                    index: i,
-                                    stage: "constitutive_update",
-                                    step,
-                                });
-                            }
-                            *sig = r.stress;
-                            // Constant for most materials: stores skipped, lines stay clean.
-                            if *q != r.heat_source {
-                                *q = r.heat_source;
-                            }
-                            if *k != r.conductivity {
-                                *k = r.conductivity;
-                            }
-                            None
+                |(c, ((((((f, vol), eps), sig), q), k), (((ms, l), tdot), ((t, m), v0))))| {
+                    let mut first = None;
+                    let rows = f
+                        .iter_mut()
+                        .zip(vol.iter_mut())
+                        .zip(eps.iter_mut())
+                        .zip(sig.iter_mut())
+                        .zip(q.iter_mut())
+                        .zip(k.iter_mut())
+                        .zip(ms.iter_mut())
+                        .zip(l.iter().zip(tdot).zip(t.iter().zip(m).zip(v0)));
+                    for (j, (((((((f, vol), eps), sig), q), k), ms), ((l, tdot), ((t, m), v0)))) in
+                        rows.enumerate()
+                    {
+                        let i = c * C + j;
+                        let r = update(i, f, vol, eps, sig, q, k, ms, (l, *tdot, *t, *m, *v0));
+                        if let Err(e) = r {
+                            first.get_or_insert(e);
                         }
-                        Err(e) => Some(e),
                     }
+                    first
                 },
             )
             .min_by_key(|e| match e {
