@@ -2,11 +2,18 @@
 //! as well as wall time, for a machine shared with other work (where wall-clock medians
 //! understate the per-thread rate). Linux only (reads `/proc/self/stat`).
 //!
-//! Run: `cargo run --release -p thm-benchmarks --example mpm_rate -- [steps]`
+//! Run: `cargo run --release -p thm-benchmarks --example mpm_rate -- [steps] [--stages | --matrix]`
+//!
+//! Default: Drucker–Prager at 40 000 and 99 856 points and the stress-free conductor at
+//! 99 856 points, 1 and 2 threads. `--stages`: CPU time per stage (1 thread). `--matrix`: all
+//! three materials of the criterion bench at 10⁴ and 10⁵ points, 1 and 2 threads.
 
 use std::time::Instant;
 use thm_benchmarks::mpm_column::column;
-use thm_mpm::{Constitutive, DruckerPrager, DruckerPragerParameters, StresslessConductor};
+use thm_mpm::{
+    Constitutive, DruckerPrager, DruckerPragerParameters, LinearThermoElastic, StresslessConductor,
+    ThermoElasticParameters,
+};
 
 fn cpu_seconds() -> f64 {
     let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
@@ -125,6 +132,23 @@ fn main() {
     })
     .expect("valid");
     let cheap = StresslessConductor::new([1.0, 1.0, 0.0]).expect("valid");
+    if std::env::args().any(|a| a == "--matrix") {
+        let el = LinearThermoElastic::new(&ThermoElasticParameters {
+            youngs_modulus: 1e6,
+            poisson_ratio: 0.3,
+            thermal_expansion: 1e-5,
+            conductivity: [1.0, 1.0, 0.0],
+        })
+        .expect("valid");
+        for (side, n) in [(50, steps * 4), (158, steps / 2)] {
+            for threads in [1, 2] {
+                run("drucker_prager", &dp, side, threads, n);
+                run("elastic", &el, side, threads, n);
+                run("stressless", &cheap, side, threads, n);
+            }
+        }
+        return;
+    }
     for threads in [1, 2] {
         run("drucker_prager", &dp, 100, threads, steps);
         run("drucker_prager", &dp, 158, threads, steps / 4);

@@ -34,12 +34,15 @@
 //! ## The step (see [`stepper`])
 //!
 //! `check_time_step` → `reset_grid` → `particle_to_grid` (pass 1: mass, momentum, capacity,
-//! heat content, external loads; nodal temperature with prescribed values; pass 2: internal
-//! forces and heat loads) → `grid_update` (B-Eqs. 20–22, velocity conditions, walls) →
+//! heat content, internal forces and external loads; nodal temperature with prescribed values;
+//! pass 2: conduction heat loads, which need the nodal temperature) → `grid_update` (B-Eqs. 20–22, velocity conditions, walls) →
 //! `grid_to_particle` (B-Eqs. 26–29, velocity gradient) → `constitutive_update`. Stresses are
 //! updated last (USL), with the velocity gradient of the updated nodal velocities. P2G scatters
 //! in horizontal strips coloured even/odd, so every node sums its contributions in one fixed
 //! order: results are bit-identical for any number of rayon threads (tested with 1 and 2).
+//! Each point's 1D uGIMP weights and gradients are computed once per step (branch-free
+//! closed form, [`shape::axis3`]) and shared by the scatters and the gather; node updates
+//! visit only the nodes that the stencils touch.
 //!
 //! ## Units and validity
 //!

@@ -273,6 +273,8 @@ pub struct DruckerPrager {
     alpha_phi: f64,
     alpha_psi: f64,
     k_phi: f64,
+    /// `1/(G + 9 K α_φ α_ψ)`: plastic multiplier per unit of yield-function excess.
+    inverse_plastic_modulus: f64,
     thermal_expansion: f64,
     conductivity: Sym2,
 }
@@ -317,13 +319,15 @@ impl DruckerPrager {
         let (alpha_phi, inv) = cone(p.friction_angle_deg);
         let (alpha_psi, _) = cone(p.dilatancy_angle_deg);
         let g = elastic.shear_modulus;
+        let bulk_modulus = elastic.lambda + 2.0 * g / 3.0;
         Ok(Self {
             lambda: elastic.lambda,
             shear_modulus: g,
-            bulk_modulus: elastic.lambda + 2.0 * g / 3.0,
+            bulk_modulus,
             alpha_phi,
             alpha_psi,
             k_phi: 3.0 * p.cohesion * inv,
+            inverse_plastic_modulus: 1.0 / (g + 9.0 * bulk_modulus * alpha_phi * alpha_psi),
             thermal_expansion: p.thermal_expansion,
             conductivity: p.conductivity,
         })
@@ -370,14 +374,19 @@ impl Constitutive for DruckerPrager {
         ];
         let mut tzz = state.stress_zz + dt * self.lambda * tr;
         let i1 = t[0] + t[1] + tzz;
-        let m = i1 / 3.0;
+        let m = i1 * (1.0 / 3.0);
         let d = [t[0] - m, t[1] - m, tzz - m];
-        let sqrt_j2 = (0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + t[2] * t[2]).sqrt();
-        let f = sqrt_j2 + self.alpha_phi * i1 - self.k_phi;
-        if f > 0.0 {
+        let j2 = 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + t[2] * t[2];
+        // f = √J₂ − c with c = k_φ − α_φ I₁: inside the cone when c ≥ 0 and J₂ ≤ c², which
+        // needs no square root.
+        let c = self.k_phi - self.alpha_phi * i1;
+        let elastic = c >= 0.0 && j2 <= c * c;
+        let sqrt_j2 = if elastic { 0.0 } else { j2.sqrt() };
+        let f = sqrt_j2 - c;
+        if !elastic && f > 0.0 {
             let g = self.shear_modulus;
             let k = self.bulk_modulus;
-            let dl = f / (g + 9.0 * k * self.alpha_phi * self.alpha_psi);
+            let dl = f * self.inverse_plastic_modulus;
             if sqrt_j2 - g * dl > 0.0 {
                 let scale = 1.0 - g * dl / sqrt_j2;
                 let m_new = m - 3.0 * k * self.alpha_psi * dl;

@@ -45,41 +45,49 @@ pub struct Axis3 {
     pub g: [f64; 3],
 }
 
-/// `gimp_1d` with the reciprocals `1/h` and `1/(h l_p)` precomputed (hot loop form).
+/// `x` limited to `[lo, hi]`, written so that it compiles to one max and one min instruction
+/// (no NaN handling: positions are validated finite).
 #[inline(always)]
-fn gimp_1d_fast(d: f64, h: f64, lp: f64, inv_h: f64, inv_hlp: f64) -> (f64, f64) {
-    let a = d.abs();
-    let s = d.signum();
-    if a < lp {
-        (1.0 - 0.5 * (d * d + lp * lp) * inv_hlp, -d * inv_hlp)
-    } else if a < h - lp {
-        (1.0 - a * inv_h, -s * inv_h)
-    } else if a < h + lp {
-        let r = h + lp - a;
-        (0.25 * r * r * inv_hlp, -0.5 * s * r * inv_hlp)
-    } else {
-        (0.0, 0.0)
-    }
+fn clamp(x: f64, lo: f64, hi: f64) -> f64 {
+    let y = if x > lo { x } else { lo };
+    if y < hi { y } else { hi }
 }
 
 /// 1D weights along one axis. `nodes` is the number of nodes along the axis (≥ 3); the caller
 /// guarantees `x0 + lp ≤ xp ≤ x0 + (nodes−1) h − lp`, so clamping `base` loses no weight.
+///
+/// Hot-loop form of [`gimp_1d`], free of branches. In cell units (`l = l_p/h`, node distance
+/// `d`), `S(d)` is the average of the hat `N(t) = 1 − |t|` over `[d − l, d + l]`. The first
+/// node lies at `d ≥ l`, where the domain meets only the falling flank `t ∈ [0, 1]`: with
+/// `p, q` the ends of the domain clamped to that flank, `S = (q − p)(2 − p − q)/(4l)` and
+/// `S' = (p − q)/(2 l h)`; the third node mirrors it on the rising flank. The middle node
+/// follows from the partition of unity, `S₁ = 1 − S₀ − S₂`, `S₁' = −S₀' − S₂'`. Each outer
+/// weight is a product of non-negative factors, so it vanishes exactly (or to `O(ε²)`) where
+/// the domain ends at the edge of the node's support, as the piecewise formula does.
 #[inline]
 pub fn axis3(xp: f64, x0: f64, h: f64, lp: f64, nodes: usize) -> Axis3 {
     let inv_h = 1.0 / h;
-    let inv_hlp = inv_h / lp;
-    let r = ((xp - x0) * inv_h + 0.5).floor() - 1.0;
-    let max_base = (nodes - 3) as f64;
-    let base = r.clamp(0.0, max_base) as usize;
-    let mut w = [0.0; 3];
-    let mut g = [0.0; 3];
-    let d0 = xp - (x0 + base as f64 * h);
-    for k in 0..3 {
-        let (wk, gk) = gimp_1d_fast(d0 - k as f64 * h, h, lp, inv_h, inv_hlp);
-        w[k] = wk;
-        g[k] = gk;
+    let u = (xp - x0) * inv_h;
+    // `as usize` floors a non-negative value and saturates a negative or NaN one to 0.
+    let base = ((u + 0.5) as usize).saturating_sub(1).min(nodes - 3);
+    let l = lp * inv_h;
+    let inv_4l = 0.25 / l;
+    let inv_2lh = 2.0 * inv_4l * inv_h;
+    let xi = u - base as f64;
+    // First node, d = ξ: falling flank.
+    let (p0, q0) = (clamp(xi - l, 0.0, 1.0), clamp(xi + l, 0.0, 1.0));
+    let w0 = (q0 - p0) * (2.0 - p0 - q0) * inv_4l;
+    let g0 = (p0 - q0) * inv_2lh;
+    // Third node, d = ξ − 2: rising flank.
+    let d2 = xi - 2.0;
+    let (p2, q2) = (clamp(d2 - l, -1.0, 0.0), clamp(d2 + l, -1.0, 0.0));
+    let w2 = (q2 - p2) * (2.0 + p2 + q2) * inv_4l;
+    let g2 = (q2 - p2) * inv_2lh;
+    Axis3 {
+        base,
+        w: [w0, 1.0 - w0 - w2, w2],
+        g: [g0, -(g0 + g2), g2],
     }
-    Axis3 { base, w, g }
 }
 
 /// The 3 × 3 stencil of one point: `φ_Ip = wx[a] · wy[b]` for node `(bx + a, by + b)`.
@@ -148,6 +156,31 @@ mod tests {
                 let (wm, _) = gimp_1d(xp - eps - xi, h, lp);
                 let fd = (wp - wm) / (2.0 * eps);
                 prop_assert!((fd - a.g[k]).abs() < 1e-5, "node {k}: fd {fd} vs {}", a.g[k]);
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+        /// The branch-free stencil equals the piecewise uGIMP formula node by node, on a grid
+        /// with an offset origin and a non-unit cell.
+        #[test]
+        fn branch_free_weights_equal_piecewise_formula(
+            xp in -0.9f64..1.9, frac in 0.05f64..0.5
+        ) {
+            let (x0, h) = (-1.0, 0.25);
+            let lp = frac * h;
+            prop_assume!(xp - lp >= x0 && xp + lp <= x0 + 12.0 * h);
+            let a = axis3(xp, x0, h, lp, 13);
+            for k in 0..3 {
+                let (w, g) = gimp_1d(xp - (x0 + (a.base + k) as f64 * h), h, lp);
+                prop_assert!((a.w[k] - w).abs() < 1e-14, "w[{k}] {} vs {w}", a.w[k]);
+                prop_assert!((a.g[k] - g).abs() < 1e-13 / h, "g[{k}] {} vs {g}", a.g[k]);
+            }
+            // Nodes outside the stencil carry no weight.
+            for k in [-1.0, 3.0] {
+                let (w, _) = gimp_1d(xp - (x0 + (a.base as f64 + k) * h), h, lp);
+                prop_assert!(w == 0.0, "node {k} outside the stencil has weight {w}");
             }
         }
     }
