@@ -208,6 +208,9 @@ pub enum Grip {
 pub struct BarLoading {
     /// Speed of each plate \[m/s\] (opposite directions).
     pub plate_speed: f64,
+    /// Strain (plate separation change over the initial length) at which the plates stop
+    /// and hold \[-\]; `f64::INFINITY` never stops them.
+    pub end_strain: f64,
     /// Out-of-plane thickness that turns the plate force into a stress \[m\].
     pub thickness: f64,
     /// Particles whose surface lies within this distance of a bar end are gripped \[m\].
@@ -226,6 +229,7 @@ impl BarLoading {
     pub fn paper_a() -> Self {
         Self {
             plate_speed: 1e-2,
+            end_strain: f64::INFINITY,
             thickness: 0.008,
             grip_depth: 1e-3,
             grip: Grip::Smooth,
@@ -244,12 +248,11 @@ pub struct BarSample {
     pub stress: f64,
 }
 
-/// A bonded bar pulled apart by two plates: the state, the stepper and the grips. Drives the
-/// verification case and the `thm run` scenario alike.
+/// A bonded bar pulled apart by two plates: the stepper and the grips (the state is the
+/// caller's [`DemState`](crate::state::DemState)). Drives the verification case and the
+/// `thm run` scenario alike.
 #[derive(Debug)]
 pub struct BarTension {
-    /// The DEM state (caller-visible for output).
-    pub state: crate::state::DemState,
     stepper: Stepper<crate::contact::CohesiveFrictional>,
     bottom: Vec<usize>,
     top: Vec<usize>,
@@ -261,7 +264,8 @@ pub struct BarTension {
 
 impl BarTension {
     /// Grips the particles near `y_bottom` and `y_top` (the bar ends \[m\]) of a bonded
-    /// packing; `width` \[m\] enters the stress area.
+    /// packing; `width` \[m\] enters the stress area. Returns the driver and the initial state
+    /// (bonds stress-free, grips moving at the plate speed).
     pub fn new(
         packing: &crate::packing::Packing,
         law: crate::contact::CohesiveFrictional,
@@ -270,8 +274,15 @@ impl BarTension {
         y_bottom: f64,
         y_top: f64,
         width: f64,
-    ) -> Result<Self, DemError> {
+    ) -> Result<(Self, crate::state::DemState), DemError> {
         crate::error::check_positive("plate_speed", loading.plate_speed)?;
+        if loading.end_strain.is_nan() || loading.end_strain <= 0.0 {
+            return Err(DemError::InvalidParameter {
+                field: "end_strain",
+                value: loading.end_strain,
+                allowed: "(0, ∞]",
+            });
+        }
         crate::error::check_positive("thickness", loading.thickness)?;
         crate::error::check_positive("width", width)?;
         crate::error::check_range("grip_depth", loading.grip_depth, 0.0, f64::MAX, "[0, ∞)")?;
@@ -314,16 +325,18 @@ impl BarTension {
             verlet_skin: 5e-4,
         }
         .validate()?;
-        Ok(Self {
+        Ok((
+            Self {
+                stepper: Stepper::new(law, params),
+                bottom,
+                top,
+                grip_y0,
+                loading: *loading,
+                length: y_top - y_bottom,
+                area: width * loading.thickness,
+            },
             state,
-            stepper: Stepper::new(law, params),
-            bottom,
-            top,
-            grip_y0,
-            loading: *loading,
-            length: y_top - y_bottom,
-            area: width * loading.thickness,
-        })
+        ))
     }
 
     /// The time step in use \[s\].
@@ -336,27 +349,45 @@ impl BarTension {
         (&self.bottom, &self.top)
     }
 
-    /// Advances one step and returns the strain and the stress of that step.
-    pub fn step(&mut self) -> Result<BarSample, DemError> {
-        self.stepper.step(&mut self.state)?;
-        let t = self.state.time;
+    /// Displacement of each plate at time `t` \[m\] and whether it is still moving.
+    fn plate_travel(&self, t: f64) -> (f64, bool) {
         let v = self.loading.plate_speed;
-        if self.loading.grip == Grip::Smooth {
-            // The plates prescribe the axial motion only.
-            let p = &mut self.state.particles;
-            for (k, &i) in self.bottom.iter().chain(&self.top).enumerate() {
-                let sign = if k < self.bottom.len() { -1.0 } else { 1.0 };
-                p.position[i].y = self.grip_y0[k] + sign * v * t;
-                p.velocity[i].y = sign * v;
-            }
+        let stop = self.loading.end_strain * self.length / (2.0 * v);
+        if t < stop {
+            (v * t, true)
+        } else {
+            (v * stop, false)
         }
-        let p = &self.state.particles;
+    }
+
+    /// Advances one step and returns the strain and the stress of that step.
+    pub fn step(&mut self, state: &mut crate::state::DemState) -> Result<BarSample, DemError> {
+        self.stepper.step(state)?;
+        // The plates prescribe the axial motion of the grips (and, clamped, all of it).
+        let (travel, moving) = self.plate_travel(state.time);
+        let speed = if moving {
+            self.loading.plate_speed
+        } else {
+            0.0
+        };
+        let p = &mut state.particles;
+        for (k, &i) in self.bottom.iter().chain(&self.top).enumerate() {
+            let sign = if k < self.bottom.len() { -1.0 } else { 1.0 };
+            p.position[i].y = self.grip_y0[k] + sign * travel;
+            p.velocity[i].y = sign * speed;
+        }
+        Ok(self.sample(state))
+    }
+
+    /// Strain and stress of the last step of `state`.
+    pub fn sample(&self, state: &crate::state::DemState) -> BarSample {
+        let p = &state.particles;
         let f_top = -p.resultant_force(&self.top).y;
         let f_bottom = p.resultant_force(&self.bottom).y;
-        Ok(BarSample {
-            strain: 2.0 * v * t / self.length,
+        BarSample {
+            strain: 2.0 * self.plate_travel(state.time).0 / self.length,
             stress: 0.5 * (f_top + f_bottom) / self.area,
-        })
+        }
     }
 }
 
@@ -472,7 +503,8 @@ pub fn uniaxial_tension(test: &TensionTest) -> Result<TensionResult, DemError> {
         [params.box_max[0], y1],
         AREA_POROSITY_CELL,
     )?;
-    let mut bar = BarTension::new(&packing, law, 2600.0, &test.loading, y0, y1, width)?;
+    let (mut bar, mut state) =
+        BarTension::new(&packing, law, 2600.0, &test.loading, y0, y1, width)?;
     let dt = bar.time_step();
     let plate_speed = test.loading.plate_speed;
     let sample_every = ((1e-6 / plate_speed) / dt).ceil().max(1.0) as u64; // every 1 µm
@@ -486,32 +518,31 @@ pub fn uniaxial_tension(test: &TensionTest) -> Result<TensionResult, DemError> {
         broken_in_tension: 0,
         coordination_initial: 0.0,
         coordination_at_failure: 0.0,
-        particle_count: bar.state.particles.len(),
+        particle_count: state.particles.len(),
         area_porosity,
         max_tensile_contact_force: 0.0,
         mean_tensile_contact_force: 0.0,
     };
-    bar.step()?;
-    result.coordination_initial = bar.state.coordination_number();
+    bar.step(&mut state)?;
+    result.coordination_initial = state.coordination_number();
     let max_steps = (0.02 * (y1 - y0) / (2.0 * plate_speed) / dt) as u64; // up to 2 % strain
     let mut peak_step_stats = (0.0, 0.0);
     // The peak is tracked at every step; the curve and the contact statistics are sampled.
-    let mut next_sample = bar.state.step + sample_every;
+    let mut next_sample = state.step + sample_every;
     let mut peak_sample_strength = 0.0;
-    while bar.state.step < max_steps {
-        let BarSample { strain, stress } = bar.step()?;
+    while state.step < max_steps {
+        let BarSample { strain, stress } = bar.step(&mut state)?;
         if stress > result.strength {
             result.strength = stress;
             result.strain_at_peak = strain;
         }
-        if bar.state.step < next_sample {
+        if state.step < next_sample {
             continue;
         }
         next_sample += sample_every;
         result.strain.push(strain);
         result.stress.push(stress);
-        let tensile = bar
-            .state
+        let tensile = state
             .contacts
             .response
             .iter()
@@ -529,7 +560,6 @@ pub fn uniaxial_tension(test: &TensionTest) -> Result<TensionResult, DemError> {
             break;
         }
     }
-    let state = &bar.state;
     result.mean_tensile_contact_force = peak_step_stats.0;
     result.broken_bonds = state.bond_breaks.len();
     result.broken_in_tension = state

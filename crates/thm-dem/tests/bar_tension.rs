@@ -26,11 +26,12 @@ fn pull(grip: Grip) -> (f64, f64, f64, f64) {
         ..BarLoading::paper_a()
     };
     let (length, width) = (6.0 * r, 2.0 * r);
-    let mut bar = BarTension::new(&chain(r), law, 2600.0, &loading, 0.0, length, width).unwrap();
+    let (mut bar, mut state) =
+        BarTension::new(&chain(r), law, 2600.0, &loading, 0.0, length, width).unwrap();
     assert_eq!(bar.grips(), (&[0usize][..], &[2usize][..]));
     let (mut peak, mut strain_at_peak) = (0.0_f64, 0.0);
-    while bar.state.bond_breaks.is_empty() {
-        let s = bar.step().unwrap();
+    while state.bond_breaks.is_empty() {
+        let s = bar.step(&mut state).unwrap();
         if s.stress > peak {
             peak = s.stress;
             strain_at_peak = s.strain;
@@ -41,7 +42,7 @@ fn pull(grip: Grip) -> (f64, f64, f64, f64) {
         peak * area,
         strain_at_peak,
         length,
-        bar.state.particles.position[1].x,
+        state.particles.position[1].x,
     )
 }
 
@@ -80,16 +81,14 @@ fn smooth_grips_follow_the_plates_axially_only() {
         .unwrap();
     let loading = BarLoading::paper_a();
     let y_top = packing.centres[2].y + r;
-    let mut bar = BarTension::new(&packing, law, 2600.0, &loading, 0.0, y_top, 2.0 * r).unwrap();
-    let y0 = [
-        bar.state.particles.position[0].y,
-        bar.state.particles.position[2].y,
-    ];
+    let (mut bar, mut state) =
+        BarTension::new(&packing, law, 2600.0, &loading, 0.0, y_top, 2.0 * r).unwrap();
+    let y0 = [state.particles.position[0].y, state.particles.position[2].y];
     for _ in 0..2000 {
-        bar.step().unwrap();
+        bar.step(&mut state).unwrap();
     }
-    let p = &bar.state.particles;
-    let travel = loading.plate_speed * bar.state.time;
+    let p = &state.particles;
+    let travel = loading.plate_speed * state.time;
     assert!((p.position[0].y - (y0[0] - travel)).abs() < 1e-15);
     assert!((p.position[2].y - (y0[1] + travel)).abs() < 1e-15);
     assert!(
@@ -100,6 +99,36 @@ fn smooth_grips_follow_the_plates_axially_only() {
 
 #[test]
 fn bar_tension_rejects_bad_loading() {
+    let law = CohesiveFrictionalParams::paper_a_table_1()
+        .validate()
+        .unwrap();
+    let bad = BarLoading {
+        plate_speed: -1.0,
+        ..BarLoading::paper_a()
+    };
+    let err = BarTension::new(&chain(3e-3), law, 2600.0, &bad, 0.0, 0.018, 0.006).unwrap_err();
+    assert!(matches!(
+        err,
+        DemError::InvalidParameter {
+            field: "plate_speed",
+            ..
+        }
+    ));
+    let law = CohesiveFrictionalParams::paper_a_table_1()
+        .validate()
+        .unwrap();
+    let bad = BarLoading {
+        end_strain: 0.0,
+        ..BarLoading::paper_a()
+    };
+    let err = BarTension::new(&chain(3e-3), law, 2600.0, &bad, 0.0, 0.018, 0.006).unwrap_err();
+    assert!(matches!(
+        err,
+        DemError::InvalidParameter {
+            field: "end_strain",
+            ..
+        }
+    ));
     let law = CohesiveFrictionalParams::paper_a_table_1()
         .validate()
         .unwrap();
@@ -132,4 +161,30 @@ fn bar_tension_rejects_bad_loading() {
             ..
         }
     ));
+}
+
+#[test]
+fn plates_stop_at_the_end_strain_and_hold() {
+    let r = 3e-3;
+    let law = CohesiveFrictionalParams::paper_a_table_1()
+        .validate()
+        .unwrap();
+    let loading = BarLoading {
+        end_strain: 1e-3,
+        ..BarLoading::paper_a()
+    };
+    let length = 6.0 * r;
+    let (mut bar, mut state) =
+        BarTension::new(&chain(r), law, 2600.0, &loading, 0.0, length, 2.0 * r).unwrap();
+    let stop = 1e-3 * length / (2.0 * loading.plate_speed);
+    while state.time < 2.0 * stop {
+        bar.step(&mut state).unwrap();
+    }
+    let s = bar.sample(&state);
+    assert_eq!(s.strain, 1e-3);
+    let top = state.particles.position[2].y;
+    assert!((top - (5.0 * r + 0.5 * 1e-3 * length)).abs() < 1e-15);
+    assert_eq!(state.particles.velocity[2].y, 0.0);
+    // Below the break strain (0.30 %): the bonds hold, the stress is positive.
+    assert!(state.bond_breaks.is_empty() && s.stress > 0.0);
 }
