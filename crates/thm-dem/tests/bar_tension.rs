@@ -99,68 +99,69 @@ fn smooth_grips_follow_the_plates_axially_only() {
 
 #[test]
 fn bar_tension_rejects_bad_loading() {
-    let law = CohesiveFrictionalParams::paper_a_table_1()
-        .validate()
-        .unwrap();
-    let bad = BarLoading {
-        plate_speed: -1.0,
-        ..BarLoading::paper_a()
-    };
-    let err = BarTension::new(&chain(3e-3), law, 2600.0, &bad, 0.0, 0.018, 0.006).unwrap_err();
-    assert!(matches!(
-        err,
-        DemError::InvalidParameter {
-            field: "plate_speed",
-            ..
-        }
-    ));
-    let law = CohesiveFrictionalParams::paper_a_table_1()
-        .validate()
-        .unwrap();
-    let bad = BarLoading {
-        end_strain: 0.0,
-        ..BarLoading::paper_a()
-    };
-    let err = BarTension::new(&chain(3e-3), law, 2600.0, &bad, 0.0, 0.018, 0.006).unwrap_err();
-    assert!(matches!(
-        err,
-        DemError::InvalidParameter {
-            field: "end_strain",
-            ..
-        }
-    ));
-    let law = CohesiveFrictionalParams::paper_a_table_1()
-        .validate()
-        .unwrap();
-    let bad = BarLoading {
-        plate_speed: -1.0,
-        ..BarLoading::paper_a()
-    };
-    let err = BarTension::new(&chain(3e-3), law, 2600.0, &bad, 0.0, 0.018, 0.006).unwrap_err();
-    assert!(matches!(
-        err,
-        DemError::InvalidParameter {
-            field: "plate_speed",
-            ..
-        }
-    ));
-    let law = CohesiveFrictionalParams::paper_a_table_1()
-        .validate()
-        .unwrap();
-    let shallow = BarLoading {
-        grip_depth: 0.0,
-        ..BarLoading::paper_a()
-    };
-    // Grip depth 0 grips nothing when the spheres sit exactly at the ends.
-    let err =
-        BarTension::new(&chain(3e-3), law, 2600.0, &shallow, -1e-3, 0.019, 0.006).unwrap_err();
-    assert!(matches!(
-        err,
-        DemError::InvalidParameter {
-            field: "grip_depth",
-            ..
-        }
-    ));
+    let base = BarLoading::paper_a();
+    let cases = [
+        (
+            BarLoading {
+                plate_speed: -1.0,
+                ..base
+            },
+            0.0,
+            "plate_speed",
+        ),
+        (
+            BarLoading {
+                end_strain: 0.0,
+                ..base
+            },
+            0.0,
+            "end_strain",
+        ),
+        (
+            BarLoading {
+                end_strain: f64::NAN,
+                ..base
+            },
+            0.0,
+            "end_strain",
+        ),
+        (
+            BarLoading {
+                thickness: 0.0,
+                ..base
+            },
+            0.0,
+            "thickness",
+        ),
+        // Grip depth 0 grips nothing when the bar ends lie 1 mm beyond the spheres.
+        (
+            BarLoading {
+                grip_depth: 0.0,
+                ..base
+            },
+            1e-3,
+            "grip_depth",
+        ),
+    ];
+    for (loading, margin, expected) in cases {
+        let law = CohesiveFrictionalParams::paper_a_table_1()
+            .validate()
+            .unwrap();
+        let err = BarTension::new(
+            &chain(3e-3),
+            law,
+            2600.0,
+            &loading,
+            -margin,
+            0.018 + margin,
+            0.006,
+        )
+        .unwrap_err();
+        assert!(
+            matches!(err, DemError::InvalidParameter { field, .. } if field == expected),
+            "{expected}: {err}"
+        );
+    }
 }
 
 #[test]

@@ -413,11 +413,18 @@ impl Scenario for DemTensionBar {
 
     fn monitor(&self, state: &State, values: &mut Vec<f64>) {
         let s = self.bar.sample(&state.dem);
+        let dem = &state.dem;
+        // Before the first step no contact has been evaluated: the bonds are the contacts.
+        let coordination = if dem.step == 0 {
+            2.0 * dem.contacts.intact_bond_count() as f64 / dem.particles.len().max(1) as f64
+        } else {
+            dem.coordination_number()
+        };
         values.extend([
             s.strain,
             s.stress,
-            state.dem.bond_breaks.len() as f64,
-            state.dem.coordination_number(),
+            dem.bond_breaks.len() as f64,
+            coordination,
         ]);
     }
 
