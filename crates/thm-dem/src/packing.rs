@@ -12,6 +12,11 @@
 //! every pair whose surfaces are closer than `bond_gap` (or overlap), stress-free at that
 //! distance. Intended for specimens up to ~10⁴ particles; large benchmark packings use
 //! [`lattice_packing`].
+//!
+//! [`area_porosity`] measures the other porosity, the uncovered share of a rectangle with
+//! overlaps counted once ("the empty area between the spheres" of Krzaczek et al., A-Sect. 3):
+//! for the A-Sect. 3 bar a generator porosity of 10 % leaves 12.8 % uncovered, 6 % leaves
+//! about 10.6 %.
 
 use crate::contact::LinearSpringParams;
 use crate::error::{DemError, check_positive, check_range};
