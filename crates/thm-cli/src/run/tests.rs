@@ -647,6 +647,32 @@ end_strain = 0.0005
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
+    #[test]
+    fn a_packing_file_must_hold_one_layer_of_spheres() {
+        let dir = scratch("dem_3d_file");
+        let csv = dir.join("ball.csv");
+        thm_dem::packing::Packing {
+            kinematics: thm_dem::Kinematics::Spheres3d,
+            centres: vec![thm_dem::Vec3::ZERO],
+            radii: vec![1e-3],
+            bonds: Vec::new(),
+        }
+        .write_csv(&csv)
+        .unwrap();
+        let text = BAR.replace(
+            "seed = 2",
+            &format!("file = {:?}", csv.display().to_string()),
+        );
+        let err = error_of("dem_3d_file_run", &text);
+        assert!(
+            err.contains(
+                "packing.file: must hold one layer of spheres (kinematics=spheres_in_plane)"
+            ),
+            "{err}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     fn bar_error(name: &str, from: &str, to: &str) -> String {
         assert!(BAR.contains(from), "{from}");
         error_of(name, &BAR.replacen(from, to, 1))

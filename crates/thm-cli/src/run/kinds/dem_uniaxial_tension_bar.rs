@@ -244,11 +244,13 @@ fn build_packing(
             let packing = Packing::read_csv(file).map_err(|e| {
                 ConfigError::new("packing.file", format!("{}: {e}", file.display()))
             })?;
-            if !packing.kinematics.is_planar() || packing.radii.is_empty() {
+            // Disks carry forces per unit thickness, which the stress area does not expect.
+            if packing.kinematics != thm_dem::Kinematics::SpheresInPlane || packing.radii.is_empty()
+            {
                 return Err(ConfigError::new(
                     "packing.file",
                     format!(
-                        "must hold a planar packing (kinematics spheres_in_plane or disks) with at least one particle: {}",
+                        "must hold one layer of spheres (kinematics=spheres_in_plane) with at least one particle: {}",
                         file.display()
                     ),
                 ));
