@@ -24,7 +24,8 @@
 //!   `Ip2_CohFrictMat_CohFrictMat_CohFrictPhys` (the code the paper's model lives in).
 //! - **Stress.** Mean of the two plate forces over 20 mm × 8 mm: the only out-of-plane
 //!   thickness the paper states is the largest sphere diameter (A-Sect. 2.2, for fluid forces).
-//!   Strength and modulus scale with its inverse; the strain at peak does not.
+//!   Strength and modulus scale with its inverse; the strain at peak does not (with the mean
+//!   diameter, 6 mm, they would read 7.3 MPa and 3.9 GPa).
 //! - **Plates.** "Smooth" plates (A-Sect. 3.1): spheres whose surface lies within 1 mm of a bar
 //!   end follow their plate along the bar axis and are free across it and in rotation
 //!   ([`Grip::Smooth`]). Clamping them instead ([`Grip::Clamped`]) changes the five-packing
