@@ -12,6 +12,11 @@
 //! every pair whose surfaces are closer than `bond_gap` (or overlap), stress-free at that
 //! distance. Intended for specimens up to ~10⁴ particles; large benchmark packings use
 //! [`lattice_packing`].
+//!
+//! [`area_porosity`] measures the other porosity, the uncovered share of a rectangle with
+//! overlaps counted once ("the empty area between the spheres" of Krzaczek et al., A-Sect. 3):
+//! for the A-Sect. 3 bar a generator porosity of 10 % leaves 12.8 % uncovered, 6 % leaves
+//! about 10.6 %.
 
 use crate::contact::LinearSpringParams;
 use crate::error::{DemError, check_positive, check_range};
@@ -426,6 +431,59 @@ pub fn random_packing(
         },
         report,
     ))
+}
+
+/// Area porosity of a planar packing: the share of the rectangle `[lo, hi]` \[m\] not
+/// covered by any particle's circle (overlaps count once: "the empty area between the
+/// spheres", A-Sect. 3), measured at the centres of square cells of side `cell` \[m\]; the
+/// error is of the order of the perimeter-weighted cell size.
+pub fn area_porosity(
+    packing: &Packing,
+    lo: [f64; 2],
+    hi: [f64; 2],
+    cell: f64,
+) -> Result<f64, DemError> {
+    check_positive("cell", cell)?;
+    check_range("hi[0]", hi[0], lo[0] + cell, 1e6, "lo[0] + cell or more")?;
+    check_range("hi[1]", hi[1], lo[1] + cell, 1e6, "lo[1] + cell or more")?;
+    let nx = ((hi[0] - lo[0]) / cell).round().max(1.0) as usize;
+    let ny = ((hi[1] - lo[1]) / cell).round().max(1.0) as usize;
+    if nx.saturating_mul(ny) > 100_000_000 {
+        return Err(DemError::InvalidParameter {
+            field: "cell",
+            value: cell,
+            allowed: "at most 1e8 cells on the rectangle",
+        });
+    }
+    let (hx, hy) = ((hi[0] - lo[0]) / nx as f64, (hi[1] - lo[1]) / ny as f64);
+    // Mark covered cells circle by circle: O(Σ cells per circle), not O(cells × circles).
+    let mut covered = vec![false; nx * ny];
+    for (c, &r) in packing.centres.iter().zip(&packing.radii) {
+        let j0 = (((c.y - r - lo[1]) / hy).floor().max(0.0) as usize).min(ny);
+        let j1 = (((c.y + r - lo[1]) / hy).ceil().max(0.0) as usize).min(ny);
+        for j in j0..j1 {
+            let y = lo[1] + (j as f64 + 0.5) * hy;
+            let half = r * r - (y - c.y) * (y - c.y);
+            if half < 0.0 {
+                continue;
+            }
+            let half = half.sqrt();
+            // Cells whose centre x satisfies |x − c.x| ≤ half.
+            let i0 = ((c.x - half - lo[0]) / hx - 0.5).ceil().max(0.0) as usize;
+            let i1 = ((c.x + half - lo[0]) / hx - 0.5).floor();
+            if i1 < 0.0 {
+                continue;
+            }
+            let i1 = (i1 as usize).min(nx - 1);
+            for i in i0..=i1.max(i0).min(nx - 1) {
+                if i <= i1 {
+                    covered[j * nx + i] = true;
+                }
+            }
+        }
+    }
+    let empty = covered.iter().filter(|&&c| !c).count();
+    Ok(empty as f64 / (nx * ny) as f64)
 }
 
 /// A bonded packing for benchmarks: a jittered square (planar) or cubic (3D) lattice of

@@ -1,8 +1,58 @@
 //! Verification cases of this crate, collected by `cargo xtask verify`.
 //!
-//! `dem/uniaxial_tension_bar`: the uniaxial tension test of Krzaczek et al. (2023), A-Sect. 3.1,
-//! on a seeded random bar packing (20 × 80 mm, diameters 4–8 mm, porosity 10 %, one layer of
-//! plane-constrained spheres, A-Table 1 contact parameters, `α_d` = 0.08, Δt = 2·10⁻⁷ s).
+//! # `dem/uniaxial_tension_bar` (Krzaczek et al. 2023, A-Sect. 3.1)
+//!
+//! Uniaxial tension of the bonded bar of A-Sect. 3: 20 × 80 mm, sphere diameters uniform in
+//! 4–8 mm, one layer of plane-constrained spheres, A-Table 1 contact parameters (`E_c` = 3.36
+//! GPa, `ν_c` = 0.3, `C` = 150 MPa, `T` = 30 MPa, `μ_c` = 18°, `ρ` = 2600 kg/m³), `α_d` = 0.08,
+//! Δt = 2·10⁻⁷ s. Five seeded packings; the rows compare the five-packing means with the
+//! paper's 8.8 MPa, 3.5 GPa, 0.28 %, 12 broken bonds and coordination 6.53 → 4.17. Every
+//! choice below was checked by a run (numbers are five-seed means unless said otherwise).
+//!
+//! - **Porosity.** The paper's pores are "the empty area between the spheres", i.e. the
+//!   uncovered share of the bar, where overlaps count once ([`crate::packing::area_porosity`]).
+//!   The generator's porosity counts overlaps twice: its 10 % gives an area porosity of
+//!   12.8 %; its [`GENERATOR_POROSITY`] = 6 % gives 10.3–11.0 % (mean 10.6 %), reported as a
+//!   row. That makes 50–53 spheres; "40–45" cannot reach 10 % with 4–8 mm diameters
+//!   (45 × 29.3 mm² = 82 % of the bar without any overlap).
+//! - **Bonds.** A bond joins every pair whose surfaces are closer than 4 mm (the smallest
+//!   diameter), stress-free at its creation distance, `K_n` from A-Eq. 3 whatever its length.
+//!   The paper's initial coordination 6.53 cannot come from touching pairs: bonding only pairs
+//!   within 0.2 mm gives z = 4.05 (strength 2.9 MPa, E = 1.3 GPa); with 2 mm z = 4.6 (3.5 MPa,
+//!   1.65 GPa); with 4 mm z = 6.41, within 2 % of 6.53.
+//! - **Bond radius.** `T·R²`, `C·R²` with `R = min(R_A, R_B)` as YADE's
+//!   `Ip2_CohFrictMat_CohFrictMat_CohFrictPhys` (the code the paper's model lives in).
+//! - **Stress.** Mean of the two plate forces over 20 mm × 8 mm: the only out-of-plane
+//!   thickness the paper states is the largest sphere diameter (A-Sect. 2.2, for fluid forces).
+//!   Strength and modulus scale with its inverse; the strain at peak does not (with the mean
+//!   diameter, 6 mm, they would read 7.3 MPa and 3.9 GPa).
+//! - **Plates.** "Smooth" plates (A-Sect. 3.1): spheres whose surface lies within 1 mm of a bar
+//!   end follow their plate along the bar axis and are free across it and in rotation
+//!   ([`Grip::Smooth`]). Clamping them instead ([`Grip::Clamped`]) changes the five-packing
+//!   mean strength by < 1 % (6.14 vs 6.09 MPa, measured at generator porosity 10 %), single
+//!   packings by up to 7 %.
+//! - **Quasi-static loading.** Plates at ±10 mm/s instead of the paper's ±1 mm/s: at ±5 mm/s
+//!   strength, modulus and strain at peak of each of the five packings agree within 0.3 %
+//!   (largest change: 4.24 → 4.23 MPa); the paper states the same independence of the
+//!   loading velocity for `α_d` = 0.08 (A-Sect. 2.1). Only the count of bonds broken after
+//!   the peak, a dynamic collapse, changes (mean 11.6 → 8.6).
+//! - **Modulus.** Least-squares slope of the curve between 10 % and 50 % of the peak.
+//!
+//! ## Why the strength stays below the paper's
+//!
+//! Measured: 5.47 MPa (4.24–6.34 MPa over the five packings), −38 %; the modulus 2.95 GPa
+//! (−16 %) and the coordination 6.41 (−2 %) agree. The specimen is elastic–brittle, so
+//! strength ≈ E × strain at peak, and the shortfall sits in the strain at peak: 0.193 % here
+//! against 0.28 % in the paper, a ratio that does not depend on the thickness chosen above.
+//! The strain at peak is set by the first bonds to reach `T·R_min²`, i.e. by the bond
+//! strength per contact: with `R = (R_A + R_B)/2` in `T·R²` (the other common reading of
+//! A-Eq. 6) the same packings give 7.2 MPa and 0.25 % at the same modulus. The paper's own
+//! contact forces cannot settle the reading: its largest tensile contact force, 69.2 N "= T·R²",
+//! is below the smallest bond limit any 4–8 mm pair has (T·(2 mm)² = 120 N), and its mean
+//! 20.6 N is a quarter of ours (70–100 N at the peak). We keep YADE's `R_min` and leave the
+//! strength row failing rather than tune an unstated parameter. Other slip: 12 broken bonds
+//! cannot lower the coordination from 6.53 to 4.17 in a ~50-sphere bar (each lowers it by
+//! `2/N`), so the at-failure row compares with `6.53 − 2·12/N`.
 
 use crate::contact::CohesiveFrictionalParams;
 use crate::error::DemError;
@@ -31,7 +81,7 @@ pub fn cases() -> Vec<Case> {
         Case {
             name: "dem/uniaxial_tension_bar",
             description: "uniaxial tension of the bonded 20 × 80 mm bar (A-Sect. 3.1), mean of \
-                          three packings: strength, strain at peak, modulus, broken bonds, \
+                          five packings: strength, strain at peak, modulus, broken bonds, \
                           coordination vs Krzaczek et al.",
             quick: false,
             run: run_uniaxial_tension,
@@ -145,34 +195,236 @@ fn run_bond_threshold() -> Result<CaseOutput, CaseError> {
     })
 }
 
-/// Settings of the tension test.
+/// How the loading plates hold the gripped spheres.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Grip {
+    /// "Smooth" plates (A-Sect. 3.1): the gripped spheres follow the plate along the bar axis
+    /// and are free across it and in rotation (YADE's `blockedDOFs = 'y'`).
+    #[default]
+    Smooth,
+    /// The gripped spheres move rigidly with the plate (all degrees of freedom prescribed).
+    Clamped,
+}
+
+/// Loading of a bar held between two plates moving apart along `y`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BarLoading {
+    /// Speed of each plate \[m/s\] (opposite directions).
+    pub plate_speed: f64,
+    /// Strain (plate separation change over the initial length) at which the plates stop
+    /// and hold \[-\]; `f64::INFINITY` never stops them.
+    pub end_strain: f64,
+    /// Out-of-plane thickness that turns the plate force into a stress \[m\].
+    pub thickness: f64,
+    /// Particles whose surface lies within this distance of a bar end are gripped \[m\].
+    pub grip_depth: f64,
+    /// How the plates hold them.
+    pub grip: Grip,
+    /// Time step \[s\] (capped at half the critical step).
+    pub time_step: f64,
+    /// Cundall damping `α_d` (A-Eq. 7).
+    pub damping: f64,
+}
+
+impl BarLoading {
+    /// A-Sect. 3.1 with the plates at ±10 mm/s (the paper's ±1 mm/s gives the same curve, see
+    /// the module docs), stress over the largest diameter (8 mm) as thickness.
+    pub fn paper_a() -> Self {
+        Self {
+            plate_speed: 1e-2,
+            end_strain: f64::INFINITY,
+            thickness: 0.008,
+            grip_depth: 1e-3,
+            grip: Grip::Smooth,
+            time_step: 2e-7,
+            damping: 0.08,
+        }
+    }
+}
+
+/// One sample of a bar tension test.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BarSample {
+    /// Plate separation change over the initial length \[-\].
+    pub strain: f64,
+    /// Mean of the two plate forces over width × thickness, tension positive \[Pa\].
+    pub stress: f64,
+}
+
+/// A bonded bar pulled apart by two plates: the stepper and the grips (the state is the
+/// caller's [`DemState`](crate::state::DemState)). Drives the verification case and the
+/// `thm run` scenario alike.
+#[derive(Debug)]
+pub struct BarTension {
+    stepper: Stepper<crate::contact::CohesiveFrictional>,
+    bottom: Vec<usize>,
+    top: Vec<usize>,
+    grip_y0: Vec<f64>,
+    loading: BarLoading,
+    length: f64,
+    area: f64,
+}
+
+impl BarTension {
+    /// Grips the particles near `y_bottom` and `y_top` (the bar ends \[m\]) of a bonded
+    /// packing; `width` \[m\] enters the stress area. Returns the driver and the initial state
+    /// (bonds stress-free, grips moving at the plate speed).
+    pub fn new(
+        packing: &crate::packing::Packing,
+        law: crate::contact::CohesiveFrictional,
+        density: f64,
+        loading: &BarLoading,
+        y_bottom: f64,
+        y_top: f64,
+        width: f64,
+    ) -> Result<(Self, crate::state::DemState), DemError> {
+        crate::error::check_positive("plate_speed", loading.plate_speed)?;
+        if loading.end_strain.is_nan() || loading.end_strain <= 0.0 {
+            return Err(DemError::InvalidParameter {
+                field: "end_strain",
+                value: loading.end_strain,
+                allowed: "(0, ∞]",
+            });
+        }
+        crate::error::check_positive("thickness", loading.thickness)?;
+        crate::error::check_positive("width", width)?;
+        crate::error::check_range("grip_depth", loading.grip_depth, 0.0, f64::MAX, "[0, ∞)")?;
+        crate::error::check_range("y_top", y_top, y_bottom, f64::MAX, "above y_bottom")?;
+        let mut state = packing.to_state(density, 293.15)?;
+        let p = &mut state.particles;
+        let (mut bottom, mut top) = (Vec::new(), Vec::new());
+        for i in 0..p.len() {
+            let v = if p.position[i].y - p.radius[i] < y_bottom + loading.grip_depth {
+                bottom.push(i);
+                -loading.plate_speed
+            } else if p.position[i].y + p.radius[i] > y_top - loading.grip_depth {
+                top.push(i);
+                loading.plate_speed
+            } else {
+                continue;
+            };
+            p.velocity[i] = Vec3::new(0.0, v, 0.0);
+            p.fixed[i] = loading.grip == Grip::Clamped;
+        }
+        if bottom.is_empty() || top.is_empty() {
+            return Err(DemError::InvalidParameter {
+                field: "grip_depth",
+                value: loading.grip_depth,
+                allowed: "deep enough to grip at least one particle at each end",
+            });
+        }
+        let grip_y0 = bottom
+            .iter()
+            .chain(&top)
+            .map(|&i| state.particles.position[i].y)
+            .collect();
+        let dt = loading
+            .time_step
+            .min(0.5 * critical_time_step(&state, &law));
+        let params = StepperParams {
+            time_step: dt,
+            damping: loading.damping,
+            gravity: [0.0; 3],
+            verlet_skin: 5e-4,
+        }
+        .validate()?;
+        Ok((
+            Self {
+                stepper: Stepper::new(law, params),
+                bottom,
+                top,
+                grip_y0,
+                loading: *loading,
+                length: y_top - y_bottom,
+                area: width * loading.thickness,
+            },
+            state,
+        ))
+    }
+
+    /// The time step in use \[s\].
+    pub fn time_step(&self) -> f64 {
+        self.stepper.config().params().time_step
+    }
+
+    /// Indices of the gripped particles (bottom, top).
+    pub fn grips(&self) -> (&[usize], &[usize]) {
+        (&self.bottom, &self.top)
+    }
+
+    /// Displacement of each plate at time `t` \[m\] and whether it is still moving.
+    fn plate_travel(&self, t: f64) -> (f64, bool) {
+        let v = self.loading.plate_speed;
+        let stop = self.loading.end_strain * self.length / (2.0 * v);
+        if t < stop {
+            (v * t, true)
+        } else {
+            (v * stop, false)
+        }
+    }
+
+    /// Advances one step and returns the strain and the stress of that step.
+    pub fn step(&mut self, state: &mut crate::state::DemState) -> Result<BarSample, DemError> {
+        self.stepper.step(state)?;
+        // The plates prescribe the axial motion of the grips (and, clamped, all of it).
+        let (travel, moving) = self.plate_travel(state.time);
+        let speed = if moving {
+            self.loading.plate_speed
+        } else {
+            0.0
+        };
+        let p = &mut state.particles;
+        for (k, &i) in self.bottom.iter().chain(&self.top).enumerate() {
+            let sign = if k < self.bottom.len() { -1.0 } else { 1.0 };
+            p.position[i].y = self.grip_y0[k] + sign * travel;
+            p.velocity[i].y = sign * speed;
+        }
+        Ok(self.sample(state))
+    }
+
+    /// Strain and stress of the last step of `state`.
+    pub fn sample(&self, state: &crate::state::DemState) -> BarSample {
+        let p = &state.particles;
+        let f_top = -p.resultant_force(&self.top).y;
+        let f_bottom = p.resultant_force(&self.bottom).y;
+        BarSample {
+            strain: 2.0 * self.plate_travel(state.time).0 / self.length,
+            stress: 0.5 * (f_top + f_bottom) / self.area,
+        }
+    }
+}
+
+/// Settings of the tension test on a generated packing.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TensionTest {
     /// Packing seed.
     pub seed: u64,
-    /// Speed of each plate \[m/s\] (A-Sect. 3.1: 1 mm/s, opposite directions).
-    pub plate_speed: f64,
-    /// Out-of-plane thickness that turns the plate force into a stress \[m\]. The paper converts
-    /// between 2D stresses and sphere forces with the largest sphere diameter (A-Sect. 2.2).
-    pub thickness: f64,
-    /// Particles whose surface lies within this distance of the bar's end are gripped by the
-    /// plate \[m\].
-    pub grip_depth: f64,
+    /// Plates, grips, time step, damping.
+    pub loading: BarLoading,
     /// Surfaces closer than this are bonded \[m\].
     pub bond_gap: f64,
+    /// Target porosity of the packing generator (`1 − Σ A_i/A`, overlaps counted twice).
+    pub porosity: f64,
+    /// Which radius enters `T·R²`, `C·R²`.
+    pub bond_radius: crate::contact::BondRadius,
 }
 
 impl Default for TensionTest {
     fn default() -> Self {
         Self {
             seed: 1,
-            plate_speed: 1e-2,
-            thickness: 0.008,
-            grip_depth: 1e-3,
+            loading: BarLoading::paper_a(),
             bond_gap: 4e-3,
+            porosity: GENERATOR_POROSITY,
+            bond_radius: crate::contact::BondRadius::Smaller,
         }
     }
 }
+
+/// Generator porosity (overlaps counted twice) whose packings have an area porosity (the
+/// uncovered share of the bar, A-Sect. 3) of about 10 %.
+pub const GENERATOR_POROSITY: f64 = 0.06;
 
 /// What the tension test measured.
 #[derive(Debug, Clone, PartialEq)]
@@ -185,7 +437,7 @@ pub struct TensionResult {
     pub strength: f64,
     /// Strain at the peak \[-\].
     pub strain_at_peak: f64,
-    /// Secant-fit Young's modulus between 10 % and 50 % of the peak on the rising branch \[Pa\].
+    /// Least-squares Young's modulus between 10 % and 50 % of the peak on the rising branch \[Pa\].
     pub young_modulus: f64,
     /// Bonds broken when the stress has fallen below 5 % of the peak.
     pub broken_bonds: usize,
@@ -197,48 +449,69 @@ pub struct TensionResult {
     pub coordination_at_failure: f64,
     /// Number of particles.
     pub particle_count: usize,
+    /// Area porosity of the packing (uncovered share of the bar).
+    pub area_porosity: f64,
     /// Largest tensile contact force before the peak \[N\].
     pub max_tensile_contact_force: f64,
     /// Mean tensile contact force at the peak \[N\].
     pub mean_tensile_contact_force: f64,
 }
 
-/// Runs the tension test.
+/// Least-squares slope of the rising branch between 10 % and 50 % of the peak (NaN if fewer
+/// than two samples fall there).
+pub fn rising_branch_modulus(
+    strain: &[f64],
+    stress: &[f64],
+    strength: f64,
+    strain_at_peak: f64,
+) -> f64 {
+    let (mut sx, mut sy, mut sxx, mut sxy, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for (&e, &s) in strain.iter().zip(stress) {
+        if e > strain_at_peak {
+            break;
+        }
+        if s >= 0.1 * strength && s <= 0.5 * strength {
+            sx += e;
+            sy += s;
+            sxx += e * e;
+            sxy += e * s;
+            n += 1.0;
+        }
+    }
+    let denom = n * sxx - sx * sx;
+    if n >= 2.0 && denom > 0.0 {
+        (n * sxy - sx * sy) / denom
+    } else {
+        f64::NAN
+    }
+}
+
+/// Runs the tension test on a generated bar packing.
 pub fn uniaxial_tension(test: &TensionTest) -> Result<TensionResult, DemError> {
     let params = PackingParams {
         bond_gap: test.bond_gap,
+        porosity: test.porosity,
         ..PackingParams::paper_a_bar(test.seed)
     };
     let (packing, _) = random_packing(&params, 2600.0)?;
-    let mut state = packing.to_state(2600.0, 293.15)?;
-    let law = CohesiveFrictionalParams::paper_a_table_1().validate()?;
-    let (y0, y1) = (params.box_min[1], params.box_max[1]);
-    let length = y1 - y0;
-    let width = params.box_max[0] - params.box_min[0];
-    let p = &mut state.particles;
-    let mut bottom = Vec::new();
-    let mut top = Vec::new();
-    for i in 0..p.len() {
-        if p.position[i].y - p.radius[i] < y0 + test.grip_depth {
-            bottom.push(i);
-            p.fixed[i] = true;
-            p.velocity[i] = Vec3::new(0.0, -test.plate_speed, 0.0);
-        } else if p.position[i].y + p.radius[i] > y1 - test.grip_depth {
-            top.push(i);
-            p.fixed[i] = true;
-            p.velocity[i] = Vec3::new(0.0, test.plate_speed, 0.0);
-        }
+    let law = CohesiveFrictionalParams {
+        bond_radius: test.bond_radius,
+        ..CohesiveFrictionalParams::paper_a_table_1()
     }
-    let dt = 2e-7_f64.min(0.5 * critical_time_step(&state, &law));
-    let stepper_params = StepperParams {
-        time_step: dt,
-        damping: 0.08,
-        gravity: [0.0; 3],
-        verlet_skin: 5e-4,
-    };
-    let mut stepper = Stepper::new(law, stepper_params.validate()?);
-    let area = width * test.thickness;
-    let sample_every = ((1e-6 / test.plate_speed) / dt).ceil().max(1.0) as u64; // every 1 µm
+    .validate()?;
+    let (y0, y1) = (params.box_min[1], params.box_max[1]);
+    let width = params.box_max[0] - params.box_min[0];
+    let area_porosity = crate::packing::area_porosity(
+        &packing,
+        [params.box_min[0], y0],
+        [params.box_max[0], y1],
+        AREA_POROSITY_CELL,
+    )?;
+    let (mut bar, mut state) =
+        BarTension::new(&packing, law, 2600.0, &test.loading, y0, y1, width)?;
+    let dt = bar.time_step();
+    let plate_speed = test.loading.plate_speed;
+    let sample_every = ((1e-6 / plate_speed) / dt).ceil().max(1.0) as u64; // every 1 µm
     let mut result = TensionResult {
         strain: vec![0.0],
         stress: vec![0.0],
@@ -250,22 +523,19 @@ pub fn uniaxial_tension(test: &TensionTest) -> Result<TensionResult, DemError> {
         coordination_initial: 0.0,
         coordination_at_failure: 0.0,
         particle_count: state.particles.len(),
+        area_porosity,
         max_tensile_contact_force: 0.0,
         mean_tensile_contact_force: 0.0,
     };
-    stepper.step(&mut state)?;
+    bar.step(&mut state)?;
     result.coordination_initial = state.coordination_number();
-    let max_steps = (0.02 * length / (2.0 * test.plate_speed) / dt) as u64; // up to 2 % strain
+    let max_steps = (0.02 * (y1 - y0) / (2.0 * plate_speed) / dt) as u64; // up to 2 % strain
     let mut peak_step_stats = (0.0, 0.0);
     // The peak is tracked at every step; the curve and the contact statistics are sampled.
     let mut next_sample = state.step + sample_every;
     let mut peak_sample_strength = 0.0;
     while state.step < max_steps {
-        stepper.step(&mut state)?;
-        let f_top = -state.particles.resultant_force(&top).y;
-        let f_bottom = state.particles.resultant_force(&bottom).y;
-        let stress = 0.5 * (f_top + f_bottom) / area;
-        let strain = 2.0 * test.plate_speed * state.time / length;
+        let BarSample { strain, stress } = bar.step(&mut state)?;
         if stress > result.strength {
             result.strength = stress;
             result.strain_at_peak = strain;
@@ -302,96 +572,106 @@ pub fn uniaxial_tension(test: &TensionTest) -> Result<TensionResult, DemError> {
         .filter(|b| b.mode == crate::contact::BreakMode::Tension)
         .count();
     result.coordination_at_failure = state.coordination_number();
-    // Modulus: least-squares slope through the origin-free fit on the rising branch.
-    let (mut sx, mut sy, mut sxx, mut sxy, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for (&e, &s) in result.strain.iter().zip(&result.stress) {
-        if e > result.strain_at_peak {
-            break;
-        }
-        if s >= 0.1 * result.strength && s <= 0.5 * result.strength {
-            sx += e;
-            sy += s;
-            sxx += e * e;
-            sxy += e * s;
-            n += 1.0;
-        }
-    }
-    let denom = n * sxx - sx * sx;
-    result.young_modulus = if n >= 2.0 && denom > 0.0 {
-        (n * sxy - sx * sy) / denom
-    } else {
-        f64::NAN
-    };
+    result.young_modulus = rising_branch_modulus(
+        &result.strain,
+        &result.stress,
+        result.strength,
+        result.strain_at_peak,
+    );
     Ok(result)
 }
 
+/// Cell size of the area-porosity grid \[m\] (0.05 mm: 400 × 1600 cells on the bar).
+const AREA_POROSITY_CELL: f64 = 5e-5;
+
+/// Packing seeds of the bar case.
+const BAR_SEEDS: [u64; 5] = [1, 2, 3, 4, 5];
+
+/// Mean and sample standard deviation.
+fn mean_and_spread(values: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
+    let n = values.clone().count() as f64;
+    let mean = values.clone().sum::<f64>() / n;
+    let var = values.map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1.0).max(1.0);
+    (mean, var.sqrt())
+}
+
 fn run_uniaxial_tension() -> Result<CaseOutput, CaseError> {
-    let seeds = [1u64, 2, 3];
     let mut results = Vec::new();
-    for &seed in &seeds {
+    for &seed in &BAR_SEEDS {
         let test = TensionTest {
             seed,
             ..TensionTest::default()
         };
         results.push(uniaxial_tension(&test).map_err(CaseError::from_display)?);
     }
-    let mean = |f: &dyn Fn(&TensionResult) -> f64| {
-        results.iter().map(f).sum::<f64>() / results.len() as f64
-    };
-    let strength = mean(&|r| r.strength);
-    let modulus = mean(&|r| r.young_modulus);
-    let strain = mean(&|r| r.strain_at_peak);
-    let broken = mean(&|r| r.broken_bonds as f64);
-    let z0 = mean(&|r| r.coordination_initial);
-    let zf = mean(&|r| r.coordination_at_failure);
-    let n = mean(&|r| r.particle_count as f64);
-    // The paper's 6.53 → 4.17 with 12 broken bonds is arithmetically impossible for ~50
-    // spheres (12 bonds lower z by 2·12/N ≈ 0.5): the self-consistent reference is
-    // 6.53 − 2·12/N.
+    let stat = |f: fn(&TensionResult) -> f64| mean_and_spread(results.iter().map(f));
+    let strength = stat(|r| r.strength);
+    let modulus = stat(|r| r.young_modulus);
+    let strain = stat(|r| r.strain_at_peak);
+    let broken = stat(|r| r.broken_bonds as f64);
+    let z0 = stat(|r| r.coordination_initial);
+    let zf = stat(|r| r.coordination_at_failure);
+    let porosity = stat(|r| r.area_porosity);
+    let n = stat(|r| r.particle_count as f64).0;
+    // 12 broken bonds lower z by 2·12/N: the self-consistent at-failure reference.
     let zf_reference = 6.53 - 2.0 * 12.0 / n;
+    let k = BAR_SEEDS.len();
     let rows = vec![
         Row::relative(
-            "tensile strength (mean of 3)",
+            format!("tensile strength (mean of {k})"),
             "MPa",
-            strength / 1e6,
+            strength.0 / 1e6,
             8.8,
             0.30,
         ),
         Row::relative(
-            "Young's modulus (mean of 3)",
+            format!("Young's modulus (mean of {k})"),
             "GPa",
-            modulus / 1e9,
+            modulus.0 / 1e9,
             3.5,
             0.30,
         ),
         Row::relative(
-            "strain at peak (mean of 3)",
+            format!("strain at peak (mean of {k})"),
             "%",
-            100.0 * strain,
+            100.0 * strain.0,
             0.28,
             0.50,
         ),
         Row::relative(
-            "broken bonds at failure (mean of 3)",
+            format!("broken bonds at failure (mean of {k})"),
             "",
-            broken,
+            broken.0,
             12.0,
             0.50,
         ),
-        Row::relative("coordination number, initial", "", z0, 6.53, 0.30),
         Row::relative(
-            "coordination number, at failure (6.53 − 2·12/N)",
+            format!("coordination number, initial (mean of {k})"),
             "",
-            zf,
+            z0.0,
+            6.53,
+            0.30,
+        ),
+        Row::relative(
+            format!("coordination number, at failure (6.53 − 2·12/N, mean of {k})"),
+            "",
+            zf.0,
             zf_reference,
             0.30,
+        ),
+        Row::relative(
+            format!("area porosity (mean of {k})"),
+            "%",
+            100.0 * porosity.0,
+            10.0,
+            0.15,
         ),
     ];
     let e_ref = 3.5e9;
     let peak_ref = 8.8e6;
     let mut series: Vec<Series> = results
         .iter()
-        .zip(&seeds)
+        .zip(&BAR_SEEDS)
         .map(|(r, seed)| Series {
             label: format!("this code, packing seed {seed}"),
             role: SeriesRole::Measured,
@@ -405,41 +685,34 @@ fn run_uniaxial_tension() -> Result<CaseOutput, CaseError> {
         x: vec![0.0, 100.0 * peak_ref / e_ref, 0.28],
         y: vec![0.0, peak_ref / 1e6, peak_ref / 1e6],
     });
-    let per_seed: Vec<String> = results
-        .iter()
-        .zip(&seeds)
-        .map(|(r, s)| {
-            format!(
-                "seed {s}: N = {}, {:.2} MPa, {:.2} GPa, {:.3} %, {} broken ({} in tension), z {:.2} → {:.2}, largest tensile contact force before the peak {:.0} N, mean tensile contact force at the peak {:.0} N",
-                r.particle_count,
-                r.strength / 1e6,
-                r.young_modulus / 1e9,
-                100.0 * r.strain_at_peak,
-                r.broken_bonds,
-                r.broken_in_tension,
-                r.coordination_initial,
-                r.coordination_at_failure,
-                r.max_tensile_contact_force,
-                r.mean_tensile_contact_force
-            )
-        })
-        .collect();
     let mut notes = vec![
-        "Stress = mean plate force / (20 mm × 8 mm): the paper turns 2D quantities into sphere forces with the largest sphere diameter as thickness (A-Sect. 2.2) and states no other thickness; strength and modulus scale with its inverse, the strain at peak does not.".to_string(),
-        "Bonds join spheres whose surfaces are closer than 4 mm (the smallest diameter), stress-free at that distance: this bond range gives the paper's initial coordination (6.53) to within 10 %; with 0.4 mm it is 3.9 and strength and modulus fall to 2.6–3.6 MPa and 1.1–1.3 GPa.".to_string(),
-        "Grips: spheres whose surface lies within 1 mm of a bar end move with the plate at ±10 mm/s (smooth plates cannot pull); the paper's ±1 mm/s gives the same curve within 0.2 % (checked for seed 1 with the 0.4 mm bond range: 2.611 vs 2.615 MPa, 1.109 vs 1.111 GPa) at ten times the cost. Δt = 2e-7 s, α_d = 0.08 as in the paper.".to_string(),
-        "Paper slips: the maximum tensile contact force 69.20 N '= T·R²' implies R = 1.52 mm, below the smallest radius (2 mm, T·R² ≥ 120 N); 12 broken bonds cannot lower the coordination from 6.53 to 4.17 (the at-failure row uses 6.53 − 2·12/N instead).".to_string(),
-        "Strain-at-peak and broken-bond tolerances 50 %: the first is the ratio of two quantities each expected within ±30 %, the second a small count that varies by ±50 % between packings.".to_string(),
+        format!(
+            "Spread (sample standard deviation over {k} packings): strength {:.2} ± {:.2} MPa, E {:.2} ± {:.2} GPa, strain at peak {:.3} ± {:.3} %, broken bonds {:.1} ± {:.1}, z {:.2} ± {:.2} → {:.2} ± {:.2}, area porosity {:.1} ± {:.1} %.",
+            strength.0 / 1e6, strength.1 / 1e6, modulus.0 / 1e9, modulus.1 / 1e9,
+            100.0 * strain.0, 100.0 * strain.1, broken.0, broken.1, z0.0, z0.1, zf.0, zf.1,
+            100.0 * porosity.0, 100.0 * porosity.1
+        ),
+        "Stress = mean plate force / (20 mm × 8 mm), the largest sphere diameter being the only thickness the paper states (A-Sect. 2.2); strength and modulus scale with its inverse, the strain at peak does not.".to_string(),
+        "Bonds join surfaces closer than 4 mm, stress-free at that distance, T·R² and C·R² with R = min(R_A, R_B) as YADE; smooth plates at ±10 mm/s (±5 mm/s gives the same strength, modulus and strain at peak within 0.3 %), Δt = 2e-7 s, α_d = 0.08.".to_string(),
+        "Strength shortfall: elastic–brittle, so strength ≈ E × strain at peak; the modulus agrees within 20 % and the shortfall is in the strain at peak (thickness-independent), i.e. in the bond strength per contact. With R = (R_A + R_B)/2 in T·R² the same packings give 7.2 MPa at 0.25 %. The paper's contact forces (max 69.2 N '= T·R²', below T·(2 mm)² = 120 N; mean 20.6 N) cannot be reproduced with T = 30 MPa on 2–4 mm radii under any reading. See the module docs of thm_dem::verification.".to_string(),
+        "Strain-at-peak and broken-bond tolerances 50 %: the first is the ratio of two quantities each expected within ±30 %, the second a small count of a dynamic post-peak collapse. Area porosity tolerance 15 % (8.5–11.5 %): the paper says 'roughly 10 %'.".to_string(),
     ];
-    if (strength / 8.8e6 - 1.0).abs() > 0.30 {
-        notes.push(format!(
-            "The strength ({:.2} MPa) misses the ±30 % band of 8.8 MPa by {:.1} points while the modulus is within {:.0} % and the strain at peak reads low by the same share: the bar is about three spheres wide, so its strength is that of its weakest section, and the gripped ends (clamped laterally here, 'smooth' in the paper) add a stress concentration; at the same modulus the strength would follow the paper with a larger strain at peak.",
-            strength / 1e6,
-            100.0 * ((strength / 8.8e6 - 1.0).abs() - 0.30),
-            100.0 * (modulus / 3.5e9 - 1.0).abs()
-        ));
-    }
-    notes.extend(per_seed);
+    notes.extend(results.iter().zip(&BAR_SEEDS).map(|(r, s)| {
+        format!(
+            "seed {s}: N = {}, area porosity {:.1} %, {:.2} MPa, {:.2} GPa, {:.3} %, {} broken ({} in tension), z {:.2} → {:.2}, largest tensile contact force before the peak {:.0} N, mean tensile contact force at the peak {:.0} N",
+            r.particle_count,
+            100.0 * r.area_porosity,
+            r.strength / 1e6,
+            r.young_modulus / 1e9,
+            100.0 * r.strain_at_peak,
+            r.broken_bonds,
+            r.broken_in_tension,
+            r.coordination_initial,
+            r.coordination_at_failure,
+            r.max_tensile_contact_force,
+            r.mean_tensile_contact_force
+        )
+    }));
     Ok(CaseOutput {
         rows,
         plots: vec![Plot {

@@ -103,3 +103,54 @@ fn generator_rejects_bad_parameters() {
         })
     ));
 }
+
+fn planar(centres: &[(f64, f64)], radii: &[f64]) -> Packing {
+    Packing {
+        kinematics: Kinematics::SpheresInPlane,
+        centres: centres.iter().map(|&(x, y)| Vec3::new(x, y, 0.0)).collect(),
+        radii: radii.to_vec(),
+        bonds: Vec::new(),
+    }
+}
+
+#[test]
+fn area_porosity_of_one_disk_is_one_minus_its_area_share() {
+    let r = 3e-3;
+    let p = planar(&[(5e-3, 6e-3)], &[r]);
+    let phi = area_porosity(&p, [0.0, 0.0], [0.01, 0.012], 2e-5).unwrap();
+    let exact = 1.0 - std::f64::consts::PI * r * r / (0.01 * 0.012);
+    // Cell-centre sampling: error below perimeter × cell / area.
+    let bound = 2.0 * std::f64::consts::PI * r * 2e-5 / (0.01 * 0.012);
+    assert!((phi - exact).abs() < bound, "{phi} vs {exact}");
+}
+
+#[test]
+fn area_porosity_counts_an_overlap_once() {
+    // Two disks of radius r at distance d: union = 2πr² − lens, lens = 2r²acos(d/2r) − (d/2)√(4r² − d²).
+    let (r, d) = (2e-3, 3e-3);
+    let p = planar(&[(4e-3, 5e-3), (4e-3 + d, 5e-3)], &[r, r]);
+    let (w, h) = (0.012, 0.01);
+    let phi = area_porosity(&p, [0.0, 0.0], [w, h], 1e-5).unwrap();
+    let lens = 2.0 * r * r * (d / (2.0 * r)).acos() - 0.5 * d * (4.0 * r * r - d * d).sqrt();
+    let exact = 1.0 - (2.0 * std::f64::consts::PI * r * r - lens) / (w * h);
+    let bound = 4.0 * std::f64::consts::PI * r * 1e-5 / (w * h);
+    assert!((phi - exact).abs() < bound, "{phi} vs {exact}");
+    // Parts outside the rectangle do not count.
+    let outside = planar(&[(0.0, 5e-3)], &[r]);
+    let phi = area_porosity(&outside, [0.0, 0.0], [w, h], 1e-5).unwrap();
+    let half = 1.0 - 0.5 * std::f64::consts::PI * r * r / (w * h);
+    assert!((phi - half).abs() < bound);
+}
+
+#[test]
+fn area_porosity_rejects_a_bad_cell() {
+    let p = planar(&[(1e-3, 1e-3)], &[1e-3]);
+    assert!(matches!(
+        area_porosity(&p, [0.0, 0.0], [0.01, 0.01], 0.0),
+        Err(DemError::InvalidParameter { field: "cell", .. })
+    ));
+    assert!(matches!(
+        area_porosity(&p, [0.0, 0.0], [0.01, 0.01], 1e-7),
+        Err(DemError::InvalidParameter { field: "cell", .. })
+    ));
+}

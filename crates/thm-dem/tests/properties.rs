@@ -72,3 +72,40 @@ proptest! {
         prop_assert!((p1 - p0).norm() <= 1e-12 * scale, "{:?} vs {:?}", p0, p1);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    /// The area porosity lies in [0, 1], is not raised by adding a particle, and for disjoint
+    /// disks inside the rectangle equals `1 − Σ πr²/A` within the grid error.
+    #[test]
+    fn area_porosity_is_a_covered_share(
+        disks in proptest::collection::vec((1e-3..9e-3f64, 1e-3..9e-3f64, 2e-4..1.5e-3f64), 1..12),
+        extra in (0.0..0.01f64, 0.0..0.01f64, 1e-4..3e-3f64),
+    ) {
+        use thm_dem::packing::{Packing, area_porosity};
+        let make = |d: &[(f64, f64, f64)]| Packing {
+            kinematics: Kinematics::SpheresInPlane,
+            centres: d.iter().map(|&(x, y, _)| Vec3::new(x, y, 0.0)).collect(),
+            radii: d.iter().map(|&(_, _, r)| r).collect(),
+            bonds: Vec::new(),
+        };
+        let cell = 2e-5;
+        let (lo, hi) = ([0.0, 0.0], [0.01, 0.01]);
+        let phi = area_porosity(&make(&disks), lo, hi, cell).unwrap();
+        prop_assert!((0.0..=1.0).contains(&phi));
+        let mut more = disks.clone();
+        more.push(extra);
+        let phi_more = area_porosity(&make(&more), lo, hi, cell).unwrap();
+        prop_assert!(phi_more <= phi);
+        let inside = disks.iter().all(|&(x, y, r)| x - r > 0.0 && x + r < 0.01 && y - r > 0.0 && y + r < 0.01);
+        let disjoint = disks.iter().enumerate().all(|(i, a)| {
+            disks[i + 1..].iter().all(|b| ((a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)).sqrt() > a.2 + b.2 + 2.0 * cell)
+        });
+        if inside && disjoint {
+            let area: f64 = disks.iter().map(|d| std::f64::consts::PI * d.2 * d.2).sum();
+            let perimeter: f64 = disks.iter().map(|d| 2.0 * std::f64::consts::PI * d.2).sum();
+            prop_assert!((phi - (1.0 - area / 1e-4)).abs() <= perimeter * cell / 1e-4);
+        }
+    }
+}

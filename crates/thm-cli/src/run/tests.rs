@@ -519,3 +519,240 @@ probe = "1 m"
         );
     }
 }
+
+/// The bonded bar of A-Sect. 3.1 (`dem_uniaxial_tension_bar`): analytical break of a
+/// three-sphere chain read from a packing file, the generated bar against the verification
+/// driver, bit-for-bit resume, and bad fields.
+mod dem_bar {
+    use super::*;
+    use crate::run::kinds::dem_uniaxial_tension_bar::State;
+    use serde::Deserialize;
+
+    const BAR: &str = r#"
+kind = "dem_uniaxial_tension_bar"
+
+[time]
+step = "0.2 us"
+end = "2 ms"
+
+[output]
+history_every = 100
+frame_every = 2500
+checkpoint_every = 3000
+encoding = "raw"
+
+[packing]
+seed = 2
+
+[loading]
+plate_speed = "10 mm/s"
+end_strain = 0.0005
+"#;
+
+    fn final_state(out: &Path, step: u64) -> State {
+        #[derive(Deserialize)]
+        struct Ckpt {
+            state: State,
+        }
+        thm_io::load_checkpoint::<Ckpt>(&checkpoint_path(out, step), "dem_uniaxial_tension_bar", 1)
+            .unwrap()
+            .state
+    }
+
+    #[test]
+    fn a_chain_from_a_packing_file_breaks_at_t_r_squared() {
+        let dir = scratch("dem_chain");
+        let r = 3e-3;
+        let packing = thm_dem::packing::Packing {
+            kinematics: thm_dem::Kinematics::SpheresInPlane,
+            centres: (0..3)
+                .map(|k| thm_dem::Vec3::new(0.0, r + 2.0 * r * k as f64, 0.0))
+                .collect(),
+            radii: vec![r; 3],
+            bonds: vec![(0, 1), (1, 2)],
+        };
+        let csv = dir.join("chain.csv");
+        packing.write_csv(&csv).unwrap();
+        // 18 mm chain to 0.4 % strain at ±10 mm/s: 3.6 ms.
+        let text = BAR
+            .replace(
+                "seed = 2",
+                &format!("file = {:?}", csv.display().to_string()),
+            )
+            .replace("end = \"2 ms\"", "end = \"3.6 ms\"")
+            .replace("end_strain = 0.0005", "end_strain = 0.004");
+        let file = write_scenario(&dir, &text);
+        let out = dir.join("out");
+        let Outcome::Finished { steps, .. } = run(&file, &out, None).unwrap() else {
+            panic!("not finished")
+        };
+        let state = final_state(&out, steps);
+        let (t, e_c, length) = (30e6, 3.36e9, 6.0 * r);
+        // Plate force at the peak (stress × 6 mm width × 8 mm thickness) = T·R²; the two
+        // bonds in series (K_n = E_c R each) have stretched by T R / E_c each.
+        let force = state.peak_stress * (2.0 * r) * 8e-3;
+        assert!((force / (t * r * r) - 1.0).abs() < 0.01, "{force}");
+        let strain = 2.0 * t * r / e_c / length;
+        assert!(
+            (state.strain_at_peak / strain - 1.0).abs() < 0.01,
+            "{} vs {strain}",
+            state.strain_at_peak
+        );
+        assert!(!state.dem.bond_breaks.is_empty());
+        assert!(out.join("spheres.pvd").is_file() && out.join("bonds.pvd").is_file());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_shipped_scenario_finds_the_strength_of_the_verification_driver() {
+        let dir = scratch("dem_shipped");
+        let file = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenarios/dem_uniaxial_tension_bar.toml");
+        let out = dir.join("out");
+        let Outcome::Finished { steps, .. } = run(&file, &out, None).unwrap() else {
+            panic!("not finished")
+        };
+        let state = final_state(&out, steps);
+        // Same packing, law, plates and time step through the crate's own driver.
+        let reference =
+            thm_dem::verification::uniaxial_tension(&thm_dem::verification::TensionTest {
+                seed: 1,
+                ..Default::default()
+            })
+            .unwrap();
+        assert_eq!(state.peak_stress, reference.strength);
+        assert_eq!(state.strain_at_peak, reference.strain_at_peak);
+        assert_eq!(state.coordination_initial, reference.coordination_initial);
+        let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
+        assert!(summary.contains("| tensile strength | MPa |"), "{summary}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn resumed_mid_run_is_bitwise_identical() {
+        let dir = scratch("dem_bar");
+        let file = write_scenario(&dir, BAR);
+        let full = dir.join("full");
+        let Outcome::Finished { steps, .. } = run(&file, &full, None).unwrap() else {
+            panic!("not finished")
+        };
+        assert_eq!(steps, 10_000);
+        let resumed = dir.join("resumed");
+        copy_dir(&full, &resumed);
+        std::fs::remove_file(checkpoint_path(&resumed, 10_000)).unwrap();
+        std::fs::remove_file(resumed.join("spheres/spheres_00010000.vtu")).unwrap();
+        run(&file, &resumed, Some(&checkpoint_path(&resumed, 6000))).unwrap();
+        assert_same_results(&full, &resumed, "spheres", &[7500, 10_000], 10_000);
+        assert_same_results(&full, &resumed, "bonds", &[7500, 10_000], 10_000);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_packing_file_must_hold_one_layer_of_spheres() {
+        let dir = scratch("dem_3d_file");
+        let csv = dir.join("ball.csv");
+        thm_dem::packing::Packing {
+            kinematics: thm_dem::Kinematics::Spheres3d,
+            centres: vec![thm_dem::Vec3::ZERO],
+            radii: vec![1e-3],
+            bonds: Vec::new(),
+        }
+        .write_csv(&csv)
+        .unwrap();
+        let text = BAR.replace(
+            "seed = 2",
+            &format!("file = {:?}", csv.display().to_string()),
+        );
+        let err = error_of("dem_3d_file_run", &text);
+        assert!(
+            err.contains(
+                "packing.file: must hold one layer of spheres (kinematics=spheres_in_plane)"
+            ),
+            "{err}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    fn bar_error(name: &str, from: &str, to: &str) -> String {
+        assert!(BAR.contains(from), "{from}");
+        error_of(name, &BAR.replacen(from, to, 1))
+    }
+
+    #[test]
+    fn bad_fields_name_the_key_and_the_allowed_range() {
+        let cases = [
+            (
+                "seed = 2",
+                "seed = 2\nfile = \"x.csv\"",
+                "packing: give exactly one of",
+            ),
+            (
+                "seed = 2",
+                "seed = 2\nporosity = 0.9",
+                "packing.porosity: must be in [0, 0.5], got 0.9",
+            ),
+            (
+                "seed = 2",
+                "file = \"no_such_packing.csv\"",
+                "packing.file: no_such_packing.csv",
+            ),
+            (
+                "plate_speed = \"10 mm/s\"",
+                "plate_speed = \"-1 mm/s\"",
+                "loading.plate_speed: must be in [0.000001 mm/s, 10000 mm/s], got -1 mm/s",
+            ),
+            (
+                "plate_speed = \"10 mm/s\"",
+                "plate_speed = \"10 mm\"",
+                "loading.plate_speed",
+            ),
+            (
+                "end_strain = 0.0005",
+                "end_strain = 2",
+                "loading.end_strain: must be in [0.000000001, 0.5], got 2",
+            ),
+            (
+                "end_strain = 0.0005",
+                "end_strain = 0.0005\ngrip = \"glued\"",
+                "loading.grip",
+            ),
+            (
+                "end_strain = 0.0005",
+                "end_strain = 0.0005\ndamping = 1.5",
+                "loading.damping: must be in [0, 0.99], got 1.5",
+            ),
+            (
+                "end_strain = 0.0005",
+                "end_strain = 0.0005\nspeed = 1",
+                "loading.speed: unknown key",
+            ),
+            (
+                "step = \"0.2 us\"",
+                "step = \"10 us\"",
+                "time.step: must be ≤",
+            ),
+            (
+                "end = \"2 ms\"",
+                "end = \"1 ms\"",
+                "time.end: must be ≥ 2e-3 s",
+            ),
+            (
+                "[loading]",
+                "[material]\nbond_radius = \"largest\"\n[loading]",
+                "material.bond_radius",
+            ),
+            (
+                "[loading]",
+                "[material]\ntensile_strength = \"-30 MPa\"\n[loading]",
+                "material.tensile_strength: must be in [0 MPa",
+            ),
+        ];
+        for (k, (from, to, expected)) in cases.iter().enumerate() {
+            let err = bar_error(&format!("dem_bad_{k}"), from, to);
+            assert!(
+                err.contains(expected),
+                "case {k}: `{err}` lacks `{expected}`"
+            );
+        }
+    }
+}

@@ -39,8 +39,9 @@ dimension!(/// Length.
 dimension!(/// Thermodynamic temperature.
     Temperature, "a temperature", [("K", 1.0, 0.0), ("degC", 1.0, 273.15)]);
 dimension!(/// Pressure or stress (for the mechanical scenario kinds).
-    #[cfg_attr(not(test), allow(dead_code))]
     Pressure, "a pressure", [("Pa", 1.0, 0.0), ("kPa", 1e3, 0.0), ("MPa", 1e6, 0.0), ("GPa", 1e9, 0.0)]);
+dimension!(/// Velocity.
+    Velocity, "a velocity", [("m/s", 1.0, 0.0), ("mm/s", 1e-3, 0.0), ("um/s", 1e-6, 0.0)]);
 dimension!(/// Mass density.
     Density, "a density", [("kg/m^3", 1.0, 0.0), ("g/cm^3", 1e3, 0.0)]);
 dimension!(/// Specific heat capacity.

@@ -1,5 +1,6 @@
 //! The scenario kinds `thm run` knows, dispatched on the file's `kind` key.
 
+pub mod dem_uniaxial_tension_bar;
 pub mod lumped_cooling;
 pub mod mpm_semi_infinite_bar;
 
@@ -14,6 +15,7 @@ pub fn names() -> String {
     [
         lumped_cooling::LumpedCooling::KIND,
         mpm_semi_infinite_bar::SemiInfiniteBar::KIND,
+        dem_uniaxial_tension_bar::DemTensionBar::KIND,
     ]
     .iter()
     .map(|k| format!("`{k}`"))
@@ -33,6 +35,9 @@ pub fn dispatch(
         }
         mpm_semi_infinite_bar::SemiInfiniteBar::KIND => {
             drive::<mpm_semi_infinite_bar::SemiInfiniteBar>(doc, file, opts)
+        }
+        dem_uniaxial_tension_bar::DemTensionBar::KIND => {
+            drive::<dem_uniaxial_tension_bar::DemTensionBar>(doc, file, opts)
         }
         other => Err(RunError::Config {
             path: file.to_path_buf(),
