@@ -119,6 +119,7 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 mod error;
+pub mod geometry;
 mod implicit;
 pub mod params;
 pub mod properties;
@@ -128,6 +129,7 @@ pub mod stepper;
 pub mod verification;
 
 pub use error::HeatError;
+pub use geometry::HeatGeometry;
 pub use params::{
     BoundaryCondition, BoundaryParams, GradientScheme, HeatModel, HeatParams, PhaseParams,
     SolidParams, TemperatureSchedule,

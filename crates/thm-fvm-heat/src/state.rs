@@ -1,9 +1,11 @@
 //! The caller-owned state and the per-step input from the flow solver.
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use thm_vpn_mesh::PoreMesh;
 
 use crate::HeatError;
+use crate::geometry::GRAIN;
 
 /// Temperatures of all cells (fluid and solid), struct-of-arrays, owned by the caller.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -87,10 +89,30 @@ impl FlowInput {
                 });
             }
         }
-        for c in 0..n {
+        // One parallel pass per array family finds the first bad entry; the error is then
+        // built serially for that entry (same error as a serial scan).
+        let fluid_ok = |c: usize| {
             if !mesh.cell_kind[c].is_fluid() {
-                continue;
+                return true;
             }
+            let (a, rq, rp) = (
+                self.liquid_fraction[c],
+                self.liquid_density[c],
+                self.gas_density[c],
+            );
+            a.is_finite()
+                && (0.0..=1.0).contains(&a)
+                && rq.is_finite()
+                && rq >= 0.0
+                && rp.is_finite()
+                && rp >= 0.0
+                && a * rq + (1.0 - a) * rp > 0.0
+        };
+        if let Some(c) = (0..n)
+            .into_par_iter()
+            .with_min_len(GRAIN)
+            .position_first(|c| !fluid_ok(c))
+        {
             let a = self.liquid_fraction[c];
             if !(a.is_finite() && (0.0..=1.0).contains(&a)) {
                 return Err(HeatError::InputOutOfRange {
@@ -113,37 +135,46 @@ impl FlowInput {
                     });
                 }
             }
-            let rho = a * self.liquid_density[c] + (1.0 - a) * self.gas_density[c];
-            if rho <= 0.0 {
-                return Err(HeatError::InputOutOfRange {
-                    quantity: "effective fluid density",
-                    index: c,
-                    range: "> 0 kg/m³",
-                    value: rho,
-                });
-            }
+            return Err(HeatError::InputOutOfRange {
+                quantity: "effective fluid density",
+                index: c,
+                range: "> 0 kg/m³",
+                value: a * self.liquid_density[c] + (1.0 - a) * self.gas_density[c],
+            });
         }
-        for (k, &m) in self.channel_mass_flux.iter().enumerate() {
-            if !m.is_finite() {
-                return Err(HeatError::InputOutOfRange {
-                    quantity: "channel_mass_flux",
-                    index: k,
-                    range: "finite",
-                    value: m,
-                });
-            }
+        if let Some(k) = self
+            .channel_mass_flux
+            .par_iter()
+            .with_min_len(GRAIN)
+            .position_first(|m| !m.is_finite())
+        {
+            return Err(HeatError::InputOutOfRange {
+                quantity: "channel_mass_flux",
+                index: k,
+                range: "finite",
+                value: self.channel_mass_flux[k],
+            });
         }
-        for (f, &m) in self.boundary_mass_flux.iter().enumerate() {
-            let [c0, c1] = mesh.face_cells[f];
-            let open = c1 == thm_vpn_mesh::NONE && mesh.cell_kind[c0 as usize].is_fluid();
-            if !m.is_finite() || (!open && m != 0.0) {
-                return Err(HeatError::InputOutOfRange {
-                    quantity: "boundary_mass_flux",
-                    index: f,
-                    range: "finite, and 0 except on boundary faces of fluid cells",
-                    value: m,
-                });
-            }
+        if let Some(f) = self
+            .boundary_mass_flux
+            .par_iter()
+            .with_min_len(GRAIN)
+            .enumerate()
+            .position_first(|(f, &m)| {
+                // The face's cells are only looked at where the flux is not zero.
+                !m.is_finite()
+                    || (m != 0.0 && {
+                        let [c0, c1] = mesh.face_cells[f];
+                        !(c1 == thm_vpn_mesh::NONE && mesh.cell_kind[c0 as usize].is_fluid())
+                    })
+            })
+        {
+            return Err(HeatError::InputOutOfRange {
+                quantity: "boundary_mass_flux",
+                index: f,
+                range: "finite, and 0 except on boundary faces of fluid cells",
+                value: self.boundary_mass_flux[f],
+            });
         }
         Ok(())
     }

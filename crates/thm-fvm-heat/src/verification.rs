@@ -14,8 +14,8 @@ use thm_verify::{Case, CaseError, CaseOutput, Plot, Row, Series, SeriesRole};
 use thm_vpn_mesh::{BoundarySide, CellKind, PoreMesh};
 
 use crate::{
-    BoundaryCondition, BoundaryParams, FlowInput, GradientScheme, HeatModel, HeatParams, HeatState,
-    HeatStepper, PhaseParams, SolidParams, TemperatureSchedule,
+    BoundaryCondition, BoundaryParams, FlowInput, GradientScheme, HeatGeometry, HeatModel,
+    HeatParams, HeatState, HeatStepper, PhaseParams, SolidParams, TemperatureSchedule,
 };
 
 /// All verification cases of this crate.
@@ -191,6 +191,7 @@ fn run_bar(
     let mut params = bar_params(&mat, water_like(mat.specific_heat(), mat.conductivity));
     params.gradient = gradient;
     let model = HeatModel::new(&params, &mesh).map_err(err)?;
+    let geometry = HeatGeometry::new(&model, &mesh).map_err(err)?;
     let input = FlowInput::liquid_at_rest(&mesh, mat.density, 1.2);
     let mut state = HeatState::uniform(&mesh, T_INITIAL);
     let mut stepper = HeatStepper::new();
@@ -203,7 +204,7 @@ fn run_bar(
             None => {
                 let dt = t_end - state.time;
                 stepper
-                    .step(&model, &mesh, &input, &mut state, dt)
+                    .step(&model, &geometry, &mesh, &input, &mut state, dt)
                     .map_err(err)?;
             }
             Some(h) => {
@@ -211,7 +212,7 @@ fn run_bar(
                 let h = (t_end - state.time) / n as f64;
                 for _ in 0..n {
                     stepper
-                        .implicit_step(&model, &mesh, &input, &mut state, h)
+                        .implicit_step(&model, &geometry, &mesh, &input, &mut state, h)
                         .map_err(err)?;
                 }
                 state.time = t_end;
@@ -481,13 +482,14 @@ fn advection_diffusion_case() -> Result<CaseOutput, CaseError> {
             ],
         );
         let model = HeatModel::new(&params, &mesh).map_err(err)?;
+        let geometry = HeatGeometry::new(&model, &mesh).map_err(err)?;
         let input = uniform_flow(&mesh, 1.0, pe);
         let mut state = HeatState::uniform(&mesh, t0);
         let mut stepper = HeatStepper::new();
         // Slowest mode decays at α(π² + Pe²/4); run to e^-18 (below 1e-7 of ΔT).
         let t_end = 18.0 / (std::f64::consts::PI.powi(2) + 0.25 * pe * pe);
         stepper
-            .step(&model, &mesh, &input, &mut state, t_end)
+            .step(&model, &geometry, &mesh, &input, &mut state, t_end)
             .map_err(err)?;
         let mut worst = 0.0f64;
         let (mut xs, mut ts) = (Vec::new(), Vec::new());
@@ -545,6 +547,7 @@ fn advection_step_case() -> Result<CaseOutput, CaseError> {
         .map_err(err)?;
     let params = unit_fluid_params(0.0, vec![dirichlet(BoundarySide::Left, hi)]);
     let model = HeatModel::new(&params, &mesh).map_err(err)?;
+    let geometry = HeatGeometry::new(&model, &mesh).map_err(err)?;
     let u = 1.0;
     let input = uniform_flow(&mesh, 1.0, u);
     let mut state = HeatState::uniform(&mesh, lo);
@@ -559,7 +562,7 @@ fn advection_step_case() -> Result<CaseOutput, CaseError> {
     let mut t_max = f64::NEG_INFINITY;
     for _ in 0..10 {
         stepper
-            .step(&model, &mesh, &input, &mut state, t_end / 10.0)
+            .step(&model, &geometry, &mesh, &input, &mut state, t_end / 10.0)
             .map_err(err)?;
         for &t in &state.temperature {
             t_min = t_min.min(t);

@@ -5,7 +5,7 @@ mod common;
 
 use common::{random_input, random_mesh, random_temperatures, table1_params};
 use proptest::prelude::*;
-use thm_fvm_heat::{FlowInput, HeatModel, HeatState, HeatStepper};
+use thm_fvm_heat::{FlowInput, HeatGeometry, HeatModel, HeatState, HeatStepper};
 use thm_vpn_mesh::PoreMesh;
 
 fn energy(stepper: &HeatStepper, t: &[f64]) -> (f64, f64) {
@@ -42,10 +42,11 @@ proptest! {
     #[test]
     fn explicit_step_conserves_energy(seed in any::<u64>(), nx in 2usize..7, ny in 2usize..7) {
         let (mesh, model, input, mut state) = setup(seed, nx, ny, 2e-4);
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
         let mut stepper = HeatStepper::new();
-        stepper.prepare(&model, &mesh, &input, &state).unwrap();
+        stepper.prepare(&model, &geometry, &mesh, &input, &state).unwrap();
         let (e0, scale) = energy(&stepper, &state.temperature);
-        let report = stepper.step(&model, &mesh, &input, &mut state, 50.0).unwrap();
+        let report = stepper.step(&model, &geometry, &mesh, &input, &mut state, 50.0).unwrap();
         let (e1, _) = energy(&stepper, &state.temperature);
         let tol = 1e-14 * scale * (report.substeps as f64 + 1.0) * mesh.n_cells() as f64;
         prop_assert!((e1 - e0).abs() <= tol, "dE = {} J, tol {} J, {} substeps", e1 - e0, tol, report.substeps);
@@ -62,6 +63,7 @@ proptest! {
         let mut params = table1_params();
         params.liquid.conductivity = 0.0;
         let model = HeatModel::new(&params, &mesh).unwrap();
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
         let mut input = random_input(seed, &mesh, 2e-4);
         input.liquid_fraction.iter_mut().for_each(|a| *a = 1.0);
         input.liquid_density.iter_mut().for_each(|r| *r = 1000.0);
@@ -75,7 +77,7 @@ proptest! {
         let (lo, hi) = range(&state.temperature);
         let mut stepper = HeatStepper::new();
         for _ in 0..5 {
-            stepper.step(&model, &mesh, &input, &mut state, 20.0).unwrap();
+            stepper.step(&model, &geometry, &mesh, &input, &mut state, 20.0).unwrap();
             let (a, b) = range(&state.temperature);
             prop_assert!(a >= lo - 1e-9 && b <= hi + 1e-9, "range [{a}, {b}] left [{lo}, {hi}]");
         }
@@ -85,10 +87,11 @@ proptest! {
     #[test]
     fn implicit_step_conserves_energy(seed in any::<u64>(), nx in 2usize..7, ny in 2usize..7) {
         let (mesh, model, input, mut state) = setup(seed, nx, ny, 0.0);
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
         let mut stepper = HeatStepper::new();
-        stepper.prepare(&model, &mesh, &input, &state).unwrap();
+        stepper.prepare(&model, &geometry, &mesh, &input, &state).unwrap();
         let (e0, scale) = energy(&stepper, &state.temperature);
-        stepper.implicit_step(&model, &mesh, &input, &mut state, 500.0).unwrap();
+        stepper.implicit_step(&model, &geometry, &mesh, &input, &mut state, 500.0).unwrap();
         let (e1, _) = energy(&stepper, &state.temperature);
         prop_assert!((e1 - e0).abs() <= 1e-11 * scale, "dE = {} J of {} J", e1 - e0, scale);
     }
@@ -97,15 +100,16 @@ proptest! {
     #[test]
     fn serial_and_parallel_runs_are_bitwise_equal(seed in any::<u64>(), nx in 2usize..7, ny in 2usize..7) {
         let (mesh, model, input, state) = setup(seed, nx, ny, 2e-4);
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| {
                 let mut s = state.clone();
                 let mut stepper = HeatStepper::new();
-                stepper.step(&model, &mesh, &input, &mut s, 50.0).unwrap();
+                stepper.step(&model, &geometry, &mesh, &input, &mut s, 50.0).unwrap();
                 let mut s2 = s.clone();
                 let no_flux = FlowInput { channel_mass_flux: vec![0.0; input.channel_mass_flux.len()], ..input.clone() };
-                stepper.implicit_step(&model, &mesh, &no_flux, &mut s2, 100.0).unwrap();
+                stepper.implicit_step(&model, &geometry, &mesh, &no_flux, &mut s2, 100.0).unwrap();
                 (s, s2)
             })
         };
@@ -122,25 +126,26 @@ proptest! {
 #[test]
 fn save_restore_round_trip() {
     let (mesh, model, input, state) = setup(7, 5, 6, 2e-4);
+    let geometry = HeatGeometry::new(&model, &mesh).unwrap();
     let mut stepper = HeatStepper::new();
     let mut straight = state.clone();
     stepper
-        .step(&model, &mesh, &input, &mut straight, 20.0)
+        .step(&model, &geometry, &mesh, &input, &mut straight, 20.0)
         .unwrap();
     stepper
-        .step(&model, &mesh, &input, &mut straight, 20.0)
+        .step(&model, &geometry, &mesh, &input, &mut straight, 20.0)
         .unwrap();
 
     let mut first = state.clone();
     stepper
-        .step(&model, &mesh, &input, &mut first, 20.0)
+        .step(&model, &geometry, &mesh, &input, &mut first, 20.0)
         .unwrap();
     let text = serde_json::to_string(&first).unwrap();
     let mut restored: HeatState = serde_json::from_str(&text).unwrap();
     assert_eq!(restored, first);
     let mut fresh = HeatStepper::new();
     fresh
-        .step(&model, &mesh, &input, &mut restored, 20.0)
+        .step(&model, &geometry, &mesh, &input, &mut restored, 20.0)
         .unwrap();
     assert_eq!(restored.steps, straight.steps);
     for (a, b) in restored.temperature.iter().zip(&straight.temperature) {
