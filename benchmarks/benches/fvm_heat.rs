@@ -10,7 +10,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use thm_fvm_heat::{
     FlowInput, GradientScheme, HeatGeometry, HeatModel, HeatParams, HeatState, HeatStepper,
-    PhaseParams, SolidParams,
+    InterfaceModel, PhaseParams, SolidParams,
 };
 use thm_vpn_mesh::{CellKind, PoreMesh};
 
@@ -52,6 +52,7 @@ fn setup() -> (PoreMesh, HeatModel, FlowInput, HeatState) {
         boundaries: Vec::new(),
         stability_safety: 0.8,
         gradient: GradientScheme::LeastSquares,
+        interface: InterfaceModel::Nusselt,
     };
     let model = HeatModel::new(&params, &mesh).unwrap();
     let mut input = FlowInput::liquid_at_rest(&mesh, 1000.0, 1.2);

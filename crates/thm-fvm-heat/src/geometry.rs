@@ -3,8 +3,9 @@
 //! [`HeatGeometry`] holds everything the step needs that depends on the mesh and not on the
 //! material properties or the flow: in two layers.
 //!
-//! - **Topology** (cell kinds, faces, channels, which boundary sides carry a prescribed
-//!   flux): the class of every face (same medium, fluid–solid interface, boundary slot), the
+//! - **Topology** (cell kinds, faces, channels, and from the model which boundary sides
+//!   carry a prescribed flux and whether fluid–solid faces are case IV interfaces or
+//!   conduct like faces inside one medium, [`crate::InterfaceModel`]): the class of every face (same medium, fluid–solid interface, boundary slot), the
 //!   boundary-face table, the least-squares stencil sources, the cell → channel adjacency
 //!   (CSR) and the sphere owners. Built by [`HeatGeometry::new`] once per mesh (and again
 //!   after every remesh).
@@ -23,7 +24,7 @@ use rayon::prelude::*;
 use thm_vpn_mesh::{CellKind, ChannelKind, FaceKind, NONE, PoreMesh};
 
 use crate::HeatError;
-use crate::params::{HeatModel, SideCondition, side_index};
+use crate::params::{HeatModel, InterfaceModel, SideCondition, side_index};
 use crate::properties::DiameterPowers;
 
 /// Smallest admissible cosine between a face normal and the centroid link (A-Eq. 47).
@@ -117,7 +118,7 @@ impl HeatGeometry {
     /// boundary faces are Neumann rows of the least-squares gradient).
     pub fn new(model: &HeatModel, mesh: &PoreMesh) -> Result<Self, HeatError> {
         let mut g = Self::default();
-        g.build_topology(mesh)?;
+        g.build_topology(model, mesh)?;
         g.update_positions(model, mesh)?;
         Ok(g)
     }
@@ -169,7 +170,7 @@ impl HeatGeometry {
 
     /// Topology: face classes, boundary table, stencil sources, channel adjacency, sphere
     /// count. Sizes every position-dependent buffer.
-    fn build_topology(&mut self, mesh: &PoreMesh) -> Result<(), HeatError> {
+    fn build_topology(&mut self, model: &HeatModel, mesh: &PoreMesh) -> Result<(), HeatError> {
         let (n, nf, nch) = (mesh.n_cells(), mesh.n_faces(), mesh.channels.len());
         self.n_cells = n;
         self.n_faces = nf;
@@ -215,26 +216,28 @@ impl HeatGeometry {
                 continue;
             }
             let (k0, k1) = (mesh.cell_kind[c0 as usize], mesh.cell_kind[c1 as usize]);
-            self.face.push(if k0.is_fluid() == k1.is_fluid() {
-                FaceGeometry::Diffusive {
-                    conductance: 0.0,
-                    cross: [0.0; 2],
-                    d0: 0.0,
-                    d1: 0.0,
-                }
-            } else {
-                let solid = if k0.is_fluid() { k1 } else { k0 };
-                let owner = match solid {
-                    CellKind::Solid { owner } => owner,
-                    CellKind::Fluid => 0,
-                };
-                FaceGeometry::Interface {
-                    area: 0.0,
-                    solid_distance: 0.0,
-                    fluid_first: k0.is_fluid(),
-                    owner,
-                }
-            });
+            let continuous = model.interface == InterfaceModel::Continuous;
+            self.face
+                .push(if continuous || k0.is_fluid() == k1.is_fluid() {
+                    FaceGeometry::Diffusive {
+                        conductance: 0.0,
+                        cross: [0.0; 2],
+                        d0: 0.0,
+                        d1: 0.0,
+                    }
+                } else {
+                    let solid = if k0.is_fluid() { k1 } else { k0 };
+                    let owner = match solid {
+                        CellKind::Solid { owner } => owner,
+                        CellKind::Fluid => 0,
+                    };
+                    FaceGeometry::Interface {
+                        area: 0.0,
+                        solid_distance: 0.0,
+                        fluid_first: k0.is_fluid(),
+                        owner,
+                    }
+                });
         }
         // Stencil sources: the neighbour cell in the same medium, else the face value.
         self.stencil_source.clear();

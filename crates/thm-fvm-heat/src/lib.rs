@@ -131,8 +131,8 @@ pub mod verification;
 pub use error::HeatError;
 pub use geometry::HeatGeometry;
 pub use params::{
-    BoundaryCondition, BoundaryParams, GradientScheme, HeatModel, HeatParams, PhaseParams,
-    SolidParams, TemperatureSchedule,
+    BoundaryCondition, BoundaryParams, GradientScheme, HeatModel, HeatParams, InterfaceModel,
+    PhaseParams, SolidParams, TemperatureSchedule,
 };
 pub use spheres::sphere_mean_temperatures;
 pub use state::{FlowInput, HeatState};
