@@ -377,7 +377,7 @@ impl HeatGeometry {
                 let ds = dot(d, d).sqrt();
                 let cos = if ds > 0.0 { dot(n, d) / ds } else { 0.0 };
                 // NaN-safe: anything not clearly above the minimum is degenerate.
-                if !(cos > MIN_FACE_COSINE) {
+                if cos.is_nan() || cos <= MIN_FACE_COSINE {
                     return Some((f, cos));
                 }
                 match geo {

@@ -257,14 +257,19 @@ fn run_bar_on(
         }
         let (mut ys, mut ts) = (Vec::new(), Vec::new());
         let mut centre_err = 0.0f64;
-        for c in 0..mesh.n_cells() {
-            let y = mesh.cell_centroid[c][1];
+        for ((p, &t), &on_centreline) in mesh
+            .cell_centroid
+            .iter()
+            .zip(&state.temperature)
+            .zip(centre)
+        {
+            let y = p[1];
             let exact = fourier_bar_temperature(y, state.time, BAR_LENGTH, alpha, T_INITIAL, T_END);
-            let e = (state.temperature[c] - exact).abs();
+            let e = (t - exact).abs();
             worst = worst.max(e);
-            if centre[c] {
+            if on_centreline {
                 ys.push(y);
-                ts.push(state.temperature[c]);
+                ts.push(t);
                 centre_err = centre_err.max(e);
             }
         }
