@@ -33,6 +33,19 @@ pub const MIN_FACE_COSINE: f64 = 1e-3;
 /// Rayon granularity: items per task.
 pub(crate) const GRAIN: usize = 2048;
 
+/// The first index `i < n` with `bad(i)`, found in parallel chunks of [`GRAIN`] scanned
+/// serially and combined in index order (the same answer as a serial scan, for any number of
+/// threads, without a shared atomic per item).
+pub(crate) fn first_where(n: usize, bad: impl Fn(usize) -> bool + Sync) -> Option<usize> {
+    (0..n.div_ceil(GRAIN))
+        .into_par_iter()
+        .map(|k| {
+            let lo = k * GRAIN;
+            (lo..(lo + GRAIN).min(n)).find(|&i| bad(i))
+        })
+        .reduce(|| None, |a, b| a.or(b))
+}
+
 /// Marks a stencil source as a face temperature (the low bits are the face index).
 pub(crate) const FACE_VALUE: u32 = 1 << 31;
 

@@ -131,13 +131,14 @@ impl ExchangeFactors {
         let pr3 = (mix.specific_heat * mix.dynamic_viscosity / mix.conductivity)
             .max(0.0)
             .cbrt();
-        let ln_x = x.ln();
+        // x^0.6 = (x^0.2)^3 and x^0.7 = x^0.2 x^0.5: one exp, one ln, one sqrt.
+        let x02 = (0.2 * x.ln()).exp();
         Self {
             conductivity: mix.conductivity,
             x,
-            x02: (0.2 * ln_x).exp() * pr3,
-            x06: (0.6 * ln_x).exp() * pr3,
-            x07: (0.7 * ln_x).exp() * pr3,
+            x02: x02 * pr3,
+            x06: x02 * x02 * x02 * pr3,
+            x07: x02 * x.sqrt() * pr3,
         }
     }
 

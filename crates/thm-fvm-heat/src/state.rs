@@ -1,11 +1,10 @@
 //! The caller-owned state and the per-step input from the flow solver.
 
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use thm_vpn_mesh::PoreMesh;
 
 use crate::HeatError;
-use crate::geometry::GRAIN;
+use crate::geometry::first_where;
 
 /// Temperatures of all cells (fluid and solid), struct-of-arrays, owned by the caller.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -108,11 +107,7 @@ impl FlowInput {
                 && rp >= 0.0
                 && a * rq + (1.0 - a) * rp > 0.0
         };
-        if let Some(c) = (0..n)
-            .into_par_iter()
-            .with_min_len(GRAIN)
-            .position_first(|c| !fluid_ok(c))
-        {
+        if let Some(c) = first_where(n, |c| !fluid_ok(c)) {
             let a = self.liquid_fraction[c];
             if !(a.is_finite() && (0.0..=1.0).contains(&a)) {
                 return Err(HeatError::InputOutOfRange {
@@ -142,12 +137,8 @@ impl FlowInput {
                 value: a * self.liquid_density[c] + (1.0 - a) * self.gas_density[c],
             });
         }
-        if let Some(k) = self
-            .channel_mass_flux
-            .par_iter()
-            .with_min_len(GRAIN)
-            .position_first(|m| !m.is_finite())
-        {
+        let flux = &self.channel_mass_flux;
+        if let Some(k) = first_where(flux.len(), |k| !flux[k].is_finite()) {
             return Err(HeatError::InputOutOfRange {
                 quantity: "channel_mass_flux",
                 index: k,
@@ -155,20 +146,16 @@ impl FlowInput {
                 value: self.channel_mass_flux[k],
             });
         }
-        if let Some(f) = self
-            .boundary_mass_flux
-            .par_iter()
-            .with_min_len(GRAIN)
-            .enumerate()
-            .position_first(|(f, &m)| {
-                // The face's cells are only looked at where the flux is not zero.
-                !m.is_finite()
-                    || (m != 0.0 && {
-                        let [c0, c1] = mesh.face_cells[f];
-                        !(c1 == thm_vpn_mesh::NONE && mesh.cell_kind[c0 as usize].is_fluid())
-                    })
-            })
-        {
+        let boundary = &self.boundary_mass_flux;
+        if let Some(f) = first_where(boundary.len(), |f| {
+            let m = boundary[f];
+            // The face's cells are only looked at where the flux is not zero.
+            !m.is_finite()
+                || (m != 0.0 && {
+                    let [c0, c1] = mesh.face_cells[f];
+                    !(c1 == thm_vpn_mesh::NONE && mesh.cell_kind[c0 as usize].is_fluid())
+                })
+        }) {
             return Err(HeatError::InputOutOfRange {
                 quantity: "boundary_mass_flux",
                 index: f,

@@ -11,7 +11,7 @@
 use rayon::prelude::*;
 use thm_vpn_mesh::{ChannelKind, PoreMesh};
 
-use crate::geometry::{BoundaryFace, FACE_VALUE, FaceGeometry, GRAIN, dot, sub};
+use crate::geometry::{BoundaryFace, FACE_VALUE, FaceGeometry, GRAIN, dot, first_where, sub};
 use crate::params::{GradientScheme, HeatModel, SideCondition};
 use crate::properties::ExchangeFactors;
 use crate::{FlowInput, HeatError, HeatGeometry, HeatState};
@@ -158,12 +158,8 @@ impl HeatStepper {
         self.face_heat(model, geometry, mesh, input, &state.temperature, t);
         self.channel_heat(model, geometry, mesh, input, &state.temperature);
         self.advance(geometry, mesh, &mut state.temperature, h);
-        if let Some(c) = state
-            .temperature
-            .par_iter()
-            .with_min_len(GRAIN)
-            .position_first(|x| !x.is_finite())
-        {
+        let temp = &state.temperature;
+        if let Some(c) = first_where(temp.len(), |c| !temp[c].is_finite()) {
             return Err(HeatError::NonFinite {
                 quantity: "temperature",
                 cell: c,
@@ -196,12 +192,8 @@ impl HeatStepper {
                 got: state.temperature.len(),
             });
         }
-        if let Some(c) = state
-            .temperature
-            .par_iter()
-            .with_min_len(GRAIN)
-            .position_first(|t| !(t.is_finite() && *t > 0.0))
-        {
+        let temp = &state.temperature;
+        if let Some(c) = first_where(n, |c| !(temp[c].is_finite() && temp[c] > 0.0)) {
             return Err(HeatError::InputOutOfRange {
                 quantity: "temperature",
                 index: c,
