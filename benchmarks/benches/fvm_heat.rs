@@ -1,14 +1,16 @@
 //! One heat step on 100 000 fluid + 100 000 solid cells (structured triangulation, 2 × 2-square
 //! blocks alternating fluid and solid, uniform flow through the T2T channels), on 1 and 2
-//! threads: the explicit sub-step alone, a whole outer step of one sub-step (coefficients
-//! prepared + sub-step), and the backward-Euler conduction step (assembly + sparse Cholesky).
+//! threads: the explicit sub-step alone, a whole outer step of one sub-step (per-step
+//! coefficients prepared + sub-step, with the mesh geometry cached in a `HeatGeometry`), the
+//! geometry itself (built once per remesh; refreshed after the vertices move), and the
+//! backward-Euler conduction step (assembly + sparse Cholesky).
 //!
 //! Run: `cargo bench -p thm-benchmarks --bench fvm_heat`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use thm_fvm_heat::{
-    FlowInput, GradientScheme, HeatModel, HeatParams, HeatState, HeatStepper, PhaseParams,
-    SolidParams,
+    FlowInput, GradientScheme, HeatGeometry, HeatModel, HeatParams, HeatState, HeatStepper,
+    InterfaceModel, PhaseParams, SolidParams,
 };
 use thm_vpn_mesh::{CellKind, PoreMesh};
 
@@ -50,6 +52,7 @@ fn setup() -> (PoreMesh, HeatModel, FlowInput, HeatState) {
         boundaries: Vec::new(),
         stability_safety: 0.8,
         gradient: GradientScheme::LeastSquares,
+        interface: InterfaceModel::Nusselt,
     };
     let model = HeatModel::new(&params, &mesh).unwrap();
     let mut input = FlowInput::liquid_at_rest(&mesh, 1000.0, 1.2);
@@ -73,9 +76,10 @@ fn setup() -> (PoreMesh, HeatModel, FlowInput, HeatState) {
 
 fn bench(c: &mut Criterion) {
     let (mesh, model, input, state) = setup();
+    let geometry = HeatGeometry::new(&model, &mesh).unwrap();
     let mut probe = HeatStepper::new();
     let limit = probe
-        .stable_time_step(&model, &mesh, &input, &state)
+        .stable_time_step(&model, &geometry, &mesh, &input, &state)
         .unwrap();
     let dt = 0.8 * limit;
     let mut group = c.benchmark_group("fvm_heat_200k_cells");
@@ -85,18 +89,19 @@ fn bench(c: &mut Criterion) {
             .num_threads(threads)
             .build()
             .unwrap();
+        let g = &geometry;
         let mut stepper = HeatStepper::new();
         let mut s = state.clone();
-        stepper.prepare(&model, &mesh, &input, &s).unwrap();
+        stepper.prepare(&model, g, &mesh, &input, &s).unwrap();
         group.bench_function(format!("explicit_substep_{threads}_threads"), |b| {
             b.iter(|| {
                 pool.install(|| {
-                    stepper.face_temperatures(&model, &mesh, &s.temperature, 0.0);
-                    stepper.gradients(&model, &mesh, &s.temperature);
-                    stepper.limiters(&mesh, &s.temperature);
-                    stepper.face_heat(&model, &mesh, &input, &s.temperature, 0.0);
-                    stepper.channel_heat(&model, &mesh, &input, &s.temperature);
-                    stepper.advance(&mesh, &mut s.temperature, dt * 1e-6);
+                    stepper.face_temperatures(&model, g, &mesh, &s.temperature, 0.0);
+                    stepper.gradients(&model, g, &mesh, &s.temperature);
+                    stepper.limiters(g, &mesh, &s.temperature);
+                    stepper.face_heat(&model, g, &mesh, &input, &s.temperature, 0.0);
+                    stepper.channel_heat(&model, g, &mesh, &input, &s.temperature);
+                    stepper.advance(g, &mesh, &mut s.temperature, dt * 1e-6);
                 })
             })
         });
@@ -104,10 +109,22 @@ fn bench(c: &mut Criterion) {
         group.bench_function(format!("explicit_outer_step_{threads}_threads"), |b| {
             b.iter(|| {
                 pool.install(|| {
-                    let r = stepper.step(&model, &mesh, &input, &mut s, dt).unwrap();
+                    let r = stepper.step(&model, g, &mesh, &input, &mut s, dt).unwrap();
                     assert_eq!(r.substeps, 1);
                 })
             })
+        });
+        let s = state.clone();
+        group.bench_function(format!("prepare_{threads}_threads"), |b| {
+            b.iter(|| pool.install(|| stepper.prepare(&model, g, &mesh, &input, &s).unwrap()))
+        });
+        let mut moved = geometry.clone();
+        group.bench_function(
+            format!("geometry_update_positions_{threads}_threads"),
+            |b| b.iter(|| pool.install(|| moved.update_positions(&model, &mesh).unwrap())),
+        );
+        group.bench_function(format!("geometry_new_{threads}_threads"), |b| {
+            b.iter(|| pool.install(|| HeatGeometry::new(&model, &mesh).unwrap()))
         });
     }
     group.finish();
@@ -119,50 +136,45 @@ fn bench(c: &mut Criterion) {
         .num_threads(1)
         .build()
         .unwrap();
+    let g = &geometry;
     let mut stepper = HeatStepper::new();
     let mut s = state.clone();
-    stepper.prepare(&model, &mesh, &input, &s).unwrap();
-    stepper.face_temperatures(&model, &mesh, &s.temperature, 0.0);
-    stepper.gradients(&model, &mesh, &s.temperature);
-    stepper.limiters(&mesh, &s.temperature);
+    stepper.prepare(&model, g, &mesh, &input, &s).unwrap();
+    stepper.face_temperatures(&model, g, &mesh, &s.temperature, 0.0);
+    stepper.gradients(&model, g, &mesh, &s.temperature);
+    stepper.limiters(g, &mesh, &s.temperature);
     group.bench_function("prepare", |b| {
-        b.iter(|| pool.install(|| stepper.prepare(&model, &mesh, &input, &s).unwrap()))
+        b.iter(|| pool.install(|| stepper.prepare(&model, g, &mesh, &input, &s).unwrap()))
     });
     group.bench_function("prepare_validate_input", |b| {
         b.iter(|| input.validate(&mesh).unwrap())
     });
     group.bench_function("prepare_cells", |b| {
-        b.iter(|| pool.install(|| stepper.prepare_cells(&model, &mesh, &input)))
-    });
-    group.bench_function("prepare_spheres", |b| {
-        b.iter(|| stepper.prepare_spheres(&mesh))
-    });
-    group.bench_function("prepare_channels", |b| {
-        b.iter(|| stepper.prepare_channels(&mesh))
+        b.iter(|| pool.install(|| stepper.prepare_cells(&model, g, &mesh, &input)))
     });
     group.bench_function("prepare_faces", |b| {
-        b.iter(|| pool.install(|| stepper.prepare_faces(&model, &mesh).unwrap()))
+        b.iter(|| pool.install(|| stepper.prepare_faces(&model, g, &mesh)))
     });
-    group.bench_function("prepare_stencils", |b| {
-        b.iter(|| pool.install(|| stepper.prepare_stencils(&model, &mesh)))
+    group.bench_function("prepare_channels", |b| {
+        b.iter(|| pool.install(|| stepper.prepare_channels(&mesh)))
     });
     group.bench_function("face_temperatures", |b| {
-        b.iter(|| pool.install(|| stepper.face_temperatures(&model, &mesh, &s.temperature, 0.0)))
+        b.iter(|| pool.install(|| stepper.face_temperatures(&model, g, &mesh, &s.temperature, 0.0)))
     });
     group.bench_function("gradients", |b| {
-        b.iter(|| pool.install(|| stepper.gradients(&model, &mesh, &s.temperature)))
+        b.iter(|| pool.install(|| stepper.gradients(&model, g, &mesh, &s.temperature)))
     });
     group.bench_function("limiters", |b| {
-        b.iter(|| pool.install(|| stepper.limiters(&mesh, &s.temperature)))
+        b.iter(|| pool.install(|| stepper.limiters(g, &mesh, &s.temperature)))
     });
     group.bench_function("face_heat", |b| {
-        b.iter(|| pool.install(|| stepper.face_heat(&model, &mesh, &input, &s.temperature, 0.0)))
+        b.iter(|| pool.install(|| stepper.face_heat(&model, g, &mesh, &input, &s.temperature, 0.0)))
     });
     group.bench_function("channel_heat", |b| {
-        b.iter(|| pool.install(|| stepper.channel_heat(&model, &mesh, &input, &s.temperature)))
+        b.iter(|| pool.install(|| stepper.channel_heat(&model, g, &mesh, &input, &s.temperature)))
     });
     group.bench_function("advance", |b| {
-        b.iter(|| pool.install(|| stepper.advance(&mesh, &mut s.temperature, 1e-9)))
+        b.iter(|| pool.install(|| stepper.advance(g, &mesh, &mut s.temperature, 1e-9)))
     });
     group.finish();
 
@@ -172,21 +184,23 @@ fn bench(c: &mut Criterion) {
     };
     let mut group = c.benchmark_group("fvm_heat_200k_cells_implicit");
     group.sample_size(10);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(2)
-        .build()
-        .unwrap();
-    let mut stepper = HeatStepper::new();
-    let mut s = state.clone();
-    group.bench_function("implicit_step_2_threads", |b| {
-        b.iter(|| {
-            pool.install(|| {
-                stepper
-                    .implicit_step(&model, &mesh, &rest, &mut s, 10.0)
-                    .unwrap()
+    for threads in [1usize, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut stepper = HeatStepper::new();
+        let mut s = state.clone();
+        group.bench_function(format!("implicit_step_{threads}_threads"), |b| {
+            b.iter(|| {
+                pool.install(|| {
+                    stepper
+                        .implicit_step(&model, &geometry, &mesh, &rest, &mut s, 10.0)
+                        .unwrap()
+                })
             })
-        })
-    });
+        });
+    }
     group.finish();
 }
 

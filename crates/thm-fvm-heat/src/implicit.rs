@@ -13,9 +13,10 @@ use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
 use thm_vpn_mesh::{NONE, PoreMesh};
 
+use crate::geometry::BoundaryFace;
 use crate::params::{HeatModel, SideCondition};
 use crate::stepper::{FaceLaw, boundary_conductance};
-use crate::{FlowInput, HeatError, HeatState, HeatStepper};
+use crate::{FlowInput, HeatError, HeatGeometry, HeatState, HeatStepper};
 
 #[inline]
 fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -28,6 +29,7 @@ impl HeatStepper {
     pub fn implicit_step(
         &mut self,
         model: &HeatModel,
+        geometry: &HeatGeometry,
         mesh: &PoreMesh,
         input: &FlowInput,
         state: &mut HeatState,
@@ -40,7 +42,7 @@ impl HeatStepper {
                 value: dt,
             });
         }
-        self.prepare(model, mesh, input, state)?;
+        self.prepare(model, geometry, mesh, input, state)?;
         for (what, fluxes) in [
             ("channel_mass_flux", &input.channel_mass_flux),
             ("boundary_mass_flux", &input.boundary_mass_flux),
@@ -56,8 +58,8 @@ impl HeatStepper {
         let t_old = state.time;
         let t_new = t_old + dt;
         // Gradients at T^n for the deferred corrections.
-        self.face_temperatures(model, mesh, &state.temperature, t_old);
-        self.gradients(model, mesh, &state.temperature);
+        self.face_temperatures(model, geometry, mesh, &state.temperature, t_old);
+        self.gradients(model, geometry, mesh, &state.temperature);
 
         let n = mesh.n_cells();
         let temp = &state.temperature;
@@ -90,13 +92,14 @@ impl HeatStepper {
                     rhs[c1] -= s;
                 }
                 FaceLaw::Interface { g, .. } => couple(c0, c1 as usize, g, &mut diag),
-                FaceLaw::Boundary {
-                    side,
-                    conductivity,
-                    normal_distance,
-                    area,
-                    tangent,
-                } => {
+                FaceLaw::Boundary { slot } => {
+                    let BoundaryFace {
+                        side,
+                        normal_distance,
+                        area,
+                        tangent,
+                    } = geometry.boundary[slot as usize];
+                    let conductivity = self.conductivity[c0];
                     let cond = &model.sides[side as usize];
                     let correction = dot(self.gradient[c0], tangent);
                     match cond {

@@ -119,6 +119,21 @@ pub enum GradientScheme {
     GreenGauss,
 }
 
+/// How heat crosses a face between a fluid and a solid cell.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InterfaceModel {
+    /// Case IV of A-Sect. 2.3.1: the fluid-side film coefficient h_f from the Nusselt
+    /// correlations (A-Eqs. 43–45) in series with the solid's half cell λ_s / d_{r,c}.
+    #[default]
+    Nusselt,
+    /// Perfect thermal contact: the face conducts like a face inside one medium (A-Eq. 47
+    /// with the distance-weighted harmonic conductivity of the two cells). This is the
+    /// equivalent homogeneous bar of A-Sect. 4, where fluid and solid carry the same
+    /// effective properties (A-Eq. 63) and heat diffuses as in one solid.
+    Continuous,
+}
+
 fn default_stability_safety() -> f64 {
     0.8
 }
@@ -144,6 +159,9 @@ pub struct HeatParams {
     /// Cell gradient scheme (default least squares; see the crate docs).
     #[serde(default)]
     pub gradient: GradientScheme,
+    /// Fluid–solid interface treatment (default: case IV with the Nusselt coefficient).
+    #[serde(default)]
+    pub interface: InterfaceModel,
 }
 
 /// Validated solid properties.
@@ -193,6 +211,7 @@ pub struct HeatModel {
     pub(crate) sides: [SideCondition; 5],
     pub(crate) stability_safety: f64,
     pub(crate) gradient: GradientScheme,
+    pub(crate) interface: InterfaceModel,
 }
 
 /// Index of a side in [`HeatModel::sides`].
@@ -326,6 +345,7 @@ impl HeatModel {
             sides,
             stability_safety: f,
             gradient: params.gradient,
+            interface: params.interface,
         })
     }
 

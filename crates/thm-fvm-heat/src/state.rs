@@ -4,6 +4,7 @@ use serde::{Deserialize, Serialize};
 use thm_vpn_mesh::PoreMesh;
 
 use crate::HeatError;
+use crate::geometry::first_where;
 
 /// Temperatures of all cells (fluid and solid), struct-of-arrays, owned by the caller.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -87,10 +88,26 @@ impl FlowInput {
                 });
             }
         }
-        for c in 0..n {
+        // One parallel pass per array family finds the first bad entry; the error is then
+        // built serially for that entry (same error as a serial scan).
+        let fluid_ok = |c: usize| {
             if !mesh.cell_kind[c].is_fluid() {
-                continue;
+                return true;
             }
+            let (a, rq, rp) = (
+                self.liquid_fraction[c],
+                self.liquid_density[c],
+                self.gas_density[c],
+            );
+            a.is_finite()
+                && (0.0..=1.0).contains(&a)
+                && rq.is_finite()
+                && rq >= 0.0
+                && rp.is_finite()
+                && rp >= 0.0
+                && a * rq + (1.0 - a) * rp > 0.0
+        };
+        if let Some(c) = first_where(n, |c| !fluid_ok(c)) {
             let a = self.liquid_fraction[c];
             if !(a.is_finite() && (0.0..=1.0).contains(&a)) {
                 return Err(HeatError::InputOutOfRange {
@@ -113,37 +130,38 @@ impl FlowInput {
                     });
                 }
             }
-            let rho = a * self.liquid_density[c] + (1.0 - a) * self.gas_density[c];
-            if rho <= 0.0 {
-                return Err(HeatError::InputOutOfRange {
-                    quantity: "effective fluid density",
-                    index: c,
-                    range: "> 0 kg/m³",
-                    value: rho,
-                });
-            }
+            return Err(HeatError::InputOutOfRange {
+                quantity: "effective fluid density",
+                index: c,
+                range: "> 0 kg/m³",
+                value: a * self.liquid_density[c] + (1.0 - a) * self.gas_density[c],
+            });
         }
-        for (k, &m) in self.channel_mass_flux.iter().enumerate() {
-            if !m.is_finite() {
-                return Err(HeatError::InputOutOfRange {
-                    quantity: "channel_mass_flux",
-                    index: k,
-                    range: "finite",
-                    value: m,
-                });
-            }
+        let flux = &self.channel_mass_flux;
+        if let Some(k) = first_where(flux.len(), |k| !flux[k].is_finite()) {
+            return Err(HeatError::InputOutOfRange {
+                quantity: "channel_mass_flux",
+                index: k,
+                range: "finite",
+                value: self.channel_mass_flux[k],
+            });
         }
-        for (f, &m) in self.boundary_mass_flux.iter().enumerate() {
-            let [c0, c1] = mesh.face_cells[f];
-            let open = c1 == thm_vpn_mesh::NONE && mesh.cell_kind[c0 as usize].is_fluid();
-            if !m.is_finite() || (!open && m != 0.0) {
-                return Err(HeatError::InputOutOfRange {
-                    quantity: "boundary_mass_flux",
-                    index: f,
-                    range: "finite, and 0 except on boundary faces of fluid cells",
-                    value: m,
-                });
-            }
+        let boundary = &self.boundary_mass_flux;
+        if let Some(f) = first_where(boundary.len(), |f| {
+            let m = boundary[f];
+            // The face's cells are only looked at where the flux is not zero.
+            !m.is_finite()
+                || (m != 0.0 && {
+                    let [c0, c1] = mesh.face_cells[f];
+                    !(c1 == thm_vpn_mesh::NONE && mesh.cell_kind[c0 as usize].is_fluid())
+                })
+        }) {
+            return Err(HeatError::InputOutOfRange {
+                quantity: "boundary_mass_flux",
+                index: f,
+                range: "finite, and 0 except on boundary faces of fluid cells",
+                value: self.boundary_mass_flux[f],
+            });
         }
         Ok(())
     }

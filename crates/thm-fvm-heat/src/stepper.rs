@@ -1,41 +1,28 @@
 //! The explicit finite-volume step (A-Eqs. 37–51) with its stability limit and sub-cycling.
 //!
-//! One outer step is the fixed sequence [`HeatStepper::prepare`] (cell properties, sphere
-//! radii and porosity, channel adjacency, face laws) and then, for each sub-step:
-//! [`HeatStepper::face_temperatures`] → [`HeatStepper::gradients`] →
+//! One outer step is the fixed sequence [`HeatStepper::prepare`] (input checks, cell
+//! properties, face and channel conductances from the cached [`HeatGeometry`]) and then, for
+//! each sub-step: [`HeatStepper::face_temperatures`] → [`HeatStepper::gradients`] →
 //! [`HeatStepper::limiters`] → [`HeatStepper::face_heat`] → [`HeatStepper::channel_heat`] →
 //! [`HeatStepper::advance`]. Every stage is a parallel map over cells, faces or channels
 //! whose results are gathered per cell in a fixed order, so 1-thread and N-thread runs give
 //! identical bits.
 
 use rayon::prelude::*;
-use thm_vpn_mesh::{CellKind, ChannelKind, FaceKind, NONE, PoreMesh};
+use thm_vpn_mesh::{ChannelKind, PoreMesh};
 
-use crate::params::{GradientScheme, HeatModel, SideCondition, side_index};
-use crate::properties::{MixtureProperties, interface_coefficient};
-use crate::{FlowInput, HeatError, HeatState};
+use crate::geometry::{BoundaryFace, FACE_VALUE, FaceGeometry, GRAIN, dot, first_where, sub};
+use crate::params::{GradientScheme, HeatModel, SideCondition};
+use crate::properties::ExchangeFactors;
+use crate::{FlowInput, HeatError, HeatGeometry, HeatState};
 
-/// Smallest admissible cosine between a face normal and the centroid link (A-Eq. 47).
-pub const MIN_FACE_COSINE: f64 = 1e-3;
+pub use crate::geometry::MIN_FACE_COSINE;
 
 /// Factor on the advective outflow in the stability limit. On a triangle the three face
 /// excursions of a linear reconstruction sum to zero, so the Barth–Jespersen bound on the
 /// largest one limits the outflow excursion to twice the room to the local maximum; the
 /// update then stays within the neighbourhood bounds for (1 + 2) Δt Σ_out ṁ c_p ≤ C.
 pub const ADVECTIVE_FACTOR: f64 = 3.0;
-
-/// Rayon granularity: items per task.
-const GRAIN: usize = 2048;
-
-#[inline]
-fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
-    a[0] * b[0] + a[1] * b[1]
-}
-
-#[inline]
-fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
-    [a[0] - b[0], a[1] - b[1]]
-}
 
 /// How heat crosses one face; coefficients computed once per outer step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,16 +34,9 @@ pub(crate) enum FaceLaw {
     /// Fluid–solid interface (case IV): series conductance `g` = |A| h_f k_s / (h_f + k_s),
     /// k_s = λ_s / d_{r,c}; face temperature weight `w0` of cell 0.
     Interface { g: f64, w0: f64 },
-    /// Outer boundary (cases I–III) on side `side`; `conductivity` of the cell, normal
-    /// distance `normal_distance` of its centroid to the face, `area` |A| [m²], `tangent`:
-    /// the part of centroid→face-centroid parallel to the face (non-orthogonal correction).
-    Boundary {
-        side: u8,
-        conductivity: f64,
-        normal_distance: f64,
-        area: f64,
-        tangent: [f64; 2],
-    },
+    /// Outer boundary (cases I–III): index into the geometry's boundary table; the
+    /// conductivity is the cell's.
+    Boundary { slot: u32 },
 }
 
 /// What one outer step did.
@@ -71,42 +51,35 @@ pub struct StepReport {
 }
 
 /// Scratch buffers of the explicit step. Holds no state between calls: every buffer is
-/// recomputed from the mesh, the model, the flow input and the state.
+/// recomputed from the geometry, the model, the flow input and the state.
 #[derive(Debug, Clone, Default)]
 pub struct HeatStepper {
     // Per cell.
     pub(crate) capacity: Vec<f64>,
     pub(crate) conductivity: Vec<f64>,
     specific_heat: Vec<f64>,
-    mixture: Vec<MixtureProperties>,
-    speed: Vec<f64>,
+    exchange: Vec<ExchangeFactors>,
     pub(crate) gradient: Vec<[f64; 2]>,
     limiter: Vec<f64>,
-    // Per cell, per face k: where the neighbour value comes from (a cell index, or
-    // `FACE_VALUE | face` for a face temperature), its least-squares gradient weight, and
-    // the offset face centroid − cell centroid; plus the gradient's constant (Neumann) part.
-    stencil_source: Vec<[u32; 3]>,
-    stencil_weight: Vec<[[f64; 2]; 3]>,
-    stencil_offset: Vec<[[f64; 2]; 3]>,
-    gradient_constant: Vec<[f64; 2]>,
-    // Per sphere.
-    sphere_radius: Vec<f64>,
-    porosity: f64,
     // Per face.
     pub(crate) face_law: Vec<FaceLaw>,
     face_temperature: Vec<f64>,
     face_heat: Vec<f64>,
     // Per channel.
     pub(crate) channel_conductance: Vec<f64>,
-    channel_point: Vec<[f64; 2]>,
     channel_heat: Vec<f64>,
-    // Cell → channels (CSR): channel index and whether the cell is the channel's second cell.
-    cell_channel_start: Vec<u32>,
-    cell_channel: Vec<(u32, bool)>,
-    // The cell at the other end of each entry of `cell_channel`.
-    cell_channel_partner: Vec<u32>,
-    // Scratch of the CSR fill.
-    cell_channel_next: Vec<u32>,
+}
+
+fn check_dt(dt: f64) -> Result<(), HeatError> {
+    if dt.is_finite() && dt > 0.0 {
+        Ok(())
+    } else {
+        Err(HeatError::ParameterOutOfRange {
+            field: "dt".to_owned(),
+            range: "> 0 s",
+            value: dt,
+        })
+    }
 }
 
 impl HeatStepper {
@@ -116,24 +89,20 @@ impl HeatStepper {
     }
 
     /// Advances `state` by `dt` [s]: prepares the coefficients once, then takes as many equal
-    /// explicit sub-steps as the stability limit requires.
+    /// explicit sub-steps as the stability limit requires. `geometry` must have been built
+    /// (or updated) for `mesh` as it is now.
     pub fn step(
         &mut self,
         model: &HeatModel,
+        geometry: &HeatGeometry,
         mesh: &PoreMesh,
         input: &FlowInput,
         state: &mut HeatState,
         dt: f64,
     ) -> Result<StepReport, HeatError> {
-        if !(dt.is_finite() && dt > 0.0) {
-            return Err(HeatError::ParameterOutOfRange {
-                field: "dt".to_owned(),
-                range: "> 0 s",
-                value: dt,
-            });
-        }
-        self.prepare(model, mesh, input, state)?;
-        let limit = self.stability_limit(model, mesh, input);
+        check_dt(dt)?;
+        self.prepare(model, geometry, mesh, input, state)?;
+        let limit = self.stability_limit(model, geometry, mesh, input);
         let allowed = model.stability_safety * limit;
         let substeps = if allowed.is_finite() {
             ((dt / allowed).ceil() as usize).max(1)
@@ -144,7 +113,7 @@ impl HeatStepper {
         let t0 = state.time;
         for k in 0..substeps {
             let t = t0 + k as f64 * h;
-            self.substep(model, mesh, input, state, t, h)?;
+            self.substep(model, geometry, mesh, input, state, t, h)?;
             state.time = t0 + (k + 1) as f64 * h;
             state.steps += 1;
         }
@@ -157,38 +126,40 @@ impl HeatStepper {
     }
 
     /// The explicit stability limit [s] for this mesh, model and input (without the safety
-    /// factor): min over cells of C_i / (Σ conductances + 2 Σ outflow ṁ c_p).
+    /// factor): min over cells of C_i / (Σ conductances + 3 Σ outflow ṁ c_p).
     pub fn stable_time_step(
         &mut self,
         model: &HeatModel,
+        geometry: &HeatGeometry,
         mesh: &PoreMesh,
         input: &FlowInput,
         state: &HeatState,
     ) -> Result<f64, HeatError> {
-        self.prepare(model, mesh, input, state)?;
-        Ok(self.stability_limit(model, mesh, input))
+        self.prepare(model, geometry, mesh, input, state)?;
+        Ok(self.stability_limit(model, geometry, mesh, input))
     }
 
+    /// One explicit sub-step of length `h` from time `t` with the coefficients of the last
+    /// [`Self::prepare`].
+    #[allow(clippy::too_many_arguments)]
     fn substep(
         &mut self,
         model: &HeatModel,
+        geometry: &HeatGeometry,
         mesh: &PoreMesh,
         input: &FlowInput,
         state: &mut HeatState,
         t: f64,
         h: f64,
     ) -> Result<(), HeatError> {
-        self.face_temperatures(model, mesh, &state.temperature, t);
-        self.gradients(model, mesh, &state.temperature);
-        self.limiters(mesh, &state.temperature);
-        self.face_heat(model, mesh, input, &state.temperature, t);
-        self.channel_heat(model, mesh, input, &state.temperature);
-        self.advance(mesh, &mut state.temperature, h);
-        if let Some(c) = state
-            .temperature
-            .par_iter()
-            .position_first(|x| !x.is_finite())
-        {
+        self.face_temperatures(model, geometry, mesh, &state.temperature, t);
+        self.gradients(model, geometry, mesh, &state.temperature);
+        self.limiters(geometry, mesh, &state.temperature);
+        self.face_heat(model, geometry, mesh, input, &state.temperature, t);
+        self.channel_heat(model, geometry, mesh, input, &state.temperature);
+        self.advance(geometry, mesh, &mut state.temperature, h);
+        let temp = &state.temperature;
+        if let Some(c) = first_where(temp.len(), |c| !temp[c].is_finite()) {
             return Err(HeatError::NonFinite {
                 quantity: "temperature",
                 cell: c,
@@ -200,16 +171,19 @@ impl HeatStepper {
         Ok(())
     }
 
-    /// Stage 0: validates the input and the state, computes per-cell capacities and
-    /// conductivities (A-Eqs. 32–36 in fluid cells), sphere radii and porosity, the channel
-    /// adjacency and every face's law.
+    /// Stage 0: checks the geometry against the mesh, the state and the input, then computes
+    /// the per-cell capacities and conductivities (A-Eqs. 32–36 in fluid cells), every face's
+    /// law (A-Eq. 47 conductances, h_f of A-Eqs. 43–45 at interfaces) and the S2S channel
+    /// conductances (A-Eq. 40). Three parallel passes, no allocation after the first call.
     pub fn prepare(
         &mut self,
         model: &HeatModel,
+        geometry: &HeatGeometry,
         mesh: &PoreMesh,
         input: &FlowInput,
         state: &HeatState,
     ) -> Result<(), HeatError> {
+        geometry.check(mesh)?;
         let n = mesh.n_cells();
         if state.temperature.len() != n {
             return Err(HeatError::LengthMismatch {
@@ -218,11 +192,8 @@ impl HeatStepper {
                 got: state.temperature.len(),
             });
         }
-        if let Some(c) = state
-            .temperature
-            .iter()
-            .position(|t| !(t.is_finite() && *t > 0.0))
-        {
+        let temp = &state.temperature;
+        if let Some(c) = first_where(n, |c| !(temp[c].is_finite() && temp[c] > 0.0)) {
             return Err(HeatError::InputOutOfRange {
                 quantity: "temperature",
                 index: c,
@@ -231,11 +202,9 @@ impl HeatStepper {
             });
         }
         input.validate(mesh)?;
-        self.prepare_cells(model, mesh, input);
-        self.prepare_spheres(mesh);
+        self.prepare_cells(model, geometry, mesh, input);
+        self.prepare_faces(model, geometry, mesh);
         self.prepare_channels(mesh);
-        self.prepare_faces(model, mesh)?;
-        self.prepare_stencils(model, mesh);
         let nf = mesh.n_faces();
         self.gradient.resize(n, [0.0; 2]);
         self.limiter.resize(n, 1.0);
@@ -245,30 +214,40 @@ impl HeatStepper {
         Ok(())
     }
 
-    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
-    pub fn prepare_cells(&mut self, model: &HeatModel, mesh: &PoreMesh, input: &FlowInput) {
+    /// Part of [`Self::prepare`]: capacity C = V (ρc), conductivity and specific heat of every
+    /// cell (mixture A-Eqs. 32–36 in fluid cells), and each fluid cell's share of the
+    /// interface coefficient (A-Eqs. 43–45) from its mixture and its fastest channel speed
+    /// |ṁ| / (ρ_eff h b).
+    pub fn prepare_cells(
+        &mut self,
+        model: &HeatModel,
+        geometry: &HeatGeometry,
+        mesh: &PoreMesh,
+        input: &FlowInput,
+    ) {
         let n = mesh.n_cells();
         self.capacity.resize(n, 0.0);
         self.conductivity.resize(n, 0.0);
         self.specific_heat.resize(n, 0.0);
-        self.speed.resize(n, 0.0);
-        let zero = crate::properties::mixture(&model.liquid, &model.gas, 1.0, 0.0, 0.0);
-        self.mixture.resize(n, zero);
+        self.exchange.resize(n, ExchangeFactors::default());
         let b = mesh.thickness;
         let solid = model.solid;
+        let start = &geometry.cell_channel_start;
+        let cell_channel = &geometry.cell_channel;
+        let ch = &mesh.channels;
         (
             &mut self.capacity,
             &mut self.conductivity,
             &mut self.specific_heat,
-            &mut self.mixture,
+            &mut self.exchange,
         )
             .into_par_iter()
             .with_min_len(GRAIN)
             .enumerate()
-            .for_each(|(c, (cap, lam, cp, mix))| {
+            .for_each(|(c, (cap, lam, cp, exchange))| {
                 let volume = mesh.cell_area[c] * b;
                 if mesh.cell_kind[c].is_fluid() {
-                    *mix = model.fluid_mixture(
+                    let mix = model.fluid_mixture(
                         input.liquid_fraction[c],
                         input.liquid_density[c],
                         input.gas_density[c],
@@ -276,325 +255,126 @@ impl HeatStepper {
                     *cap = volume * mix.volumetric_heat_capacity;
                     *lam = mix.conductivity;
                     *cp = mix.specific_heat;
+                    let mut speed = 0.0f64;
+                    for &(k, _) in &cell_channel[start[c] as usize..start[c + 1] as usize] {
+                        let k = k as usize;
+                        let a = ch.aperture[k] * b;
+                        if a > 0.0 && mix.density > 0.0 {
+                            speed = speed.max(input.channel_mass_flux[k].abs() / (mix.density * a));
+                        }
+                    }
+                    *exchange = ExchangeFactors::new(&mix, speed);
                 } else {
-                    *mix = zero;
                     *cap = volume * solid.volumetric_heat_capacity();
                     *lam = solid.conductivity;
                     *cp = solid.specific_heat;
                 }
             });
-        // Fluid speed per cell: the largest channel speed |ṁ| / (ρ_eff h b) of its channels.
-        self.speed.iter_mut().for_each(|v| *v = 0.0);
-        for k in 0..mesh.channels.len() {
-            let m = input.channel_mass_flux[k].abs();
-            let area = mesh.channels.aperture[k] * b;
-            for &c in &mesh.channels.cells[k] {
-                let c = c as usize;
-                let rho = self.mixture[c].density;
-                if area > 0.0 && rho > 0.0 {
-                    self.speed[c] = self.speed[c].max(m / (rho * area));
-                }
-            }
-        }
     }
 
-    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
-    pub fn prepare_spheres(&mut self, mesh: &PoreMesh) {
-        let mut n_spheres = 0usize;
-        let (mut fluid, mut total) = (0.0, 0.0);
-        for (c, k) in mesh.cell_kind.iter().enumerate() {
-            total += mesh.cell_area[c];
-            match k {
-                CellKind::Fluid => fluid += mesh.cell_area[c],
-                CellKind::Solid { owner } => n_spheres = n_spheres.max(*owner as usize + 1),
-            }
-        }
-        self.porosity = if total > 0.0 { fluid / total } else { 0.0 };
-        self.sphere_radius.clear();
-        self.sphere_radius.resize(n_spheres, 0.0);
-        for (c, k) in mesh.cell_kind.iter().enumerate() {
-            if let CellKind::Solid { owner } = k {
-                self.sphere_radius[*owner as usize] += mesh.cell_area[c];
-            }
-        }
-        // Radius of the circle with the cross-section area of the sphere's solid cells.
-        for r in &mut self.sphere_radius {
-            *r = (*r / std::f64::consts::PI).sqrt();
-        }
-    }
-
-    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
-    pub fn prepare_channels(&mut self, mesh: &PoreMesh) {
-        let n = mesh.n_cells();
-        let ch = &mesh.channels;
-        self.cell_channel_start.clear();
-        self.cell_channel_start.resize(n + 1, 0);
-        for cells in &ch.cells {
-            for &c in cells {
-                self.cell_channel_start[c as usize + 1] += 1;
-            }
-        }
-        for c in 0..n {
-            self.cell_channel_start[c + 1] += self.cell_channel_start[c];
-        }
-        self.cell_channel.clear();
-        self.cell_channel
-            .resize(self.cell_channel_start[n] as usize, (NONE, false));
-        // Fill in channel order: each cell's list is sorted by channel index.
-        self.cell_channel_partner.clear();
-        self.cell_channel_partner
-            .resize(self.cell_channel_start[n] as usize, NONE);
-        self.cell_channel_next.clear();
-        self.cell_channel_next
-            .extend_from_slice(&self.cell_channel_start[..n]);
-        let next = &mut self.cell_channel_next;
-        for (k, cells) in ch.cells.iter().enumerate() {
-            for (side, &c) in cells.iter().enumerate() {
-                let slot = &mut next[c as usize];
-                self.cell_channel[*slot as usize] = (k as u32, side == 1);
-                self.cell_channel_partner[*slot as usize] = cells[1 - side];
-                *slot += 1;
-            }
-        }
-        let nch = ch.len();
-        self.channel_conductance.resize(nch, 0.0);
-        self.channel_point.resize(nch, [0.0; 2]);
-        for k in 0..nch {
-            let [a, b] = ch.cells[k].map(|c| c as usize);
-            let (pa, pb) = (mesh.cell_centroid[a], mesh.cell_centroid[b]);
-            match ch.kind[k] {
-                ChannelKind::T2T => {
-                    // Diffusion across the shared face is part of the face laws.
-                    self.channel_conductance[k] = 0.0;
-                    let f = ch.face[k];
-                    self.channel_point[k] = if f == NONE {
-                        [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])]
-                    } else {
-                        mesh.face_centroid[f as usize]
-                    };
-                }
-                ChannelKind::S2S => {
-                    // A-Eq. 40: λ_eff A_k / L_k with A_k = h b.
-                    let lambda = 0.5 * (self.conductivity[a] + self.conductivity[b]);
-                    let l = ch.length[k];
-                    self.channel_conductance[k] = if l > 0.0 {
-                        lambda * ch.aperture[k] * mesh.thickness / l
-                    } else {
-                        0.0
-                    };
-                    self.channel_point[k] = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])];
-                }
-            }
-        }
-    }
-
-    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
-    pub fn prepare_faces(&mut self, model: &HeatModel, mesh: &PoreMesh) -> Result<(), HeatError> {
+    /// Part of [`Self::prepare`]: every face's law from its geometry and the cell
+    /// conductivities of [`Self::prepare_cells`]. Inside a medium λ_f is the harmonic mean
+    /// weighted by the distances along e_s; at a fluid–solid interface h_f (A-Eq. 45) uses
+    /// the fluid cell's mixture and its fastest channel speed |ṁ| / (ρ_eff h b).
+    pub fn prepare_faces(&mut self, model: &HeatModel, geometry: &HeatGeometry, mesh: &PoreMesh) {
         let nf = mesh.n_faces();
-        // Degenerate links first (deterministic: the lowest face index).
-        if let Some(f) = (0..nf).into_par_iter().position_first(|f| {
-            let [c0, c1] = mesh.face_cells[f];
-            if c1 == NONE {
-                return false;
-            }
-            face_cosine(mesh, f, c0 as usize, c1 as usize) <= MIN_FACE_COSINE
-        }) {
-            let [c0, c1] = mesh.face_cells[f];
-            return Err(HeatError::DegenerateFace {
-                face: f,
-                cosine: face_cosine(mesh, f, c0 as usize, c1 as usize),
-                minimum: MIN_FACE_COSINE,
-            });
-        }
-        self.face_law
-            .resize(nf, FaceLaw::Interface { g: 0.0, w0: 0.5 });
-        let b = mesh.thickness;
+        self.face_law.resize(nf, FaceLaw::Boundary { slot: 0 });
         let lam = &self.conductivity;
-        let mix = &self.mixture;
-        let speed = &self.speed;
-        let radius = &self.sphere_radius;
-        let porosity = self.porosity;
+        let exchange = &self.exchange;
+        let diameter = &geometry.sphere_diameter_powers;
+        let porosity = geometry.porosity;
         let solid_lambda = model.solid.conductivity;
-        self.face_law
-            .par_iter_mut()
-            .with_min_len(GRAIN)
-            .enumerate()
-            .for_each(|(f, law)| {
-                let [c0, c1] = mesh.face_cells[f];
-                let c0 = c0 as usize;
-                let n = mesh.face_normal[f];
-                let area = mesh.face_length[f] * b;
-                let xf = mesh.face_centroid[f];
-                let x0 = mesh.cell_centroid[c0];
-                if c1 == NONE {
-                    let r = sub(xf, x0);
-                    let dn = dot(r, n);
-                    let side = match mesh.face_kind[f] {
-                        FaceKind::Boundary(s) => side_index(s) as u8,
-                        FaceKind::Interior => side_index(thm_vpn_mesh::BoundarySide::Outline) as u8,
-                    };
-                    *law = FaceLaw::Boundary {
-                        side,
-                        conductivity: lam[c0],
-                        normal_distance: dn,
-                        area,
-                        tangent: [r[0] - dn * n[0], r[1] - dn * n[1]],
-                    };
-                    return;
-                }
-                let c1 = c1 as usize;
-                let (k0, k1) = (mesh.cell_kind[c0], mesh.cell_kind[c1]);
-                let x1 = mesh.cell_centroid[c1];
-                if k0.is_fluid() == k1.is_fluid() {
-                    let d = sub(x1, x0);
-                    let ds = dot(d, d).sqrt();
-                    let es = [d[0] / ds, d[1] / ds];
-                    let cos = dot(n, es);
-                    // Harmonic face conductivity weighted by the distances along e_s.
-                    let d0 = dot(sub(xf, x0), es).max(0.0);
-                    let d1 = dot(sub(x1, xf), es).max(0.0);
-                    let (l0, l1) = (lam[c0], lam[c1]);
-                    let den = d1 * l0 + d0 * l1;
-                    let lf = if den > 0.0 {
-                        l0 * l1 * (d0 + d1) / den
-                    } else {
-                        0.5 * (l0 + l1)
-                    };
-                    let g = lf * area / (ds * cos);
-                    let cross = [
-                        lf * (area * n[0] - es[0] * area / cos),
-                        lf * (area * n[1] - es[1] * area / cos),
-                    ];
-                    *law = FaceLaw::Diffusive { g, cross };
-                } else {
-                    let (cf, cs) = if k0.is_fluid() { (c0, c1) } else { (c1, c0) };
-                    let owner = match mesh.cell_kind[cs] {
-                        CellKind::Solid { owner } => owner as usize,
-                        CellKind::Fluid => 0,
-                    };
-                    let r = radius.get(owner).copied().unwrap_or(0.0);
-                    let h = interface_coefficient(&mix[cf], porosity, speed[cf], r);
-                    let ds = dot(
-                        sub(xf, mesh.cell_centroid[cs]),
-                        sub(xf, mesh.cell_centroid[cs]),
-                    )
-                    .sqrt();
-                    let ks = if ds > 0.0 { solid_lambda / ds } else { 0.0 };
-                    let (g, wf) = if h + ks > 0.0 {
-                        (area * h * ks / (h + ks), h / (h + ks))
-                    } else {
-                        (0.0, 0.5)
-                    };
-                    let w0 = if cf == c0 { wf } else { 1.0 - wf };
-                    *law = FaceLaw::Interface { g, w0 };
-                }
-            });
-        Ok(())
-    }
-
-    /// Part of [`Self::prepare`] (public so that it can be timed and tested alone).
-    pub fn prepare_stencils(&mut self, model: &HeatModel, mesh: &PoreMesh) {
-        let n = mesh.n_cells();
-        self.stencil_source.resize(n, [0; 3]);
-        self.stencil_weight.resize(n, [[0.0; 2]; 3]);
-        self.stencil_offset.resize(n, [[0.0; 2]; 3]);
-        self.gradient_constant.resize(n, [0.0; 2]);
-        let laws = &self.face_law;
-        (
-            &mut self.stencil_source,
-            &mut self.stencil_weight,
-            &mut self.stencil_offset,
-            &mut self.gradient_constant,
-        )
+        (&mut self.face_law, &geometry.face)
             .into_par_iter()
             .with_min_len(GRAIN)
             .enumerate()
-            .for_each(|(c, (source, weight, offset, constant))| {
-                *constant = [0.0; 2];
-                let xc = mesh.cell_centroid[c];
-                // Rows e_k · ∇T = ΔT_k / |d_k| (unit e_k), Neumann rows n · ∇T = q / λ.
-                let mut dir = [[0.0; 2]; 3];
-                let mut inv_len = [0.0; 3];
-                let mut neumann = [0.0; 2];
-                let (mut m00, mut m01, mut m11) = (0.0, 0.0, 0.0);
-                for (k, &f) in mesh.cell_faces[c].iter().enumerate() {
-                    let f = f as usize;
-                    let [c0, c1] = mesh.face_cells[f];
-                    offset[k] = sub(mesh.face_centroid[f], xc);
-                    let (d, e_override) = match laws[f] {
-                        FaceLaw::Diffusive { .. } => {
-                            let other = if c0 == c as u32 { c1 } else { c0 };
-                            source[k] = other;
-                            (sub(mesh.cell_centroid[other as usize], xc), None)
+            .for_each(|(f, (law, geo))| {
+                *law = match *geo {
+                    FaceGeometry::Diffusive {
+                        conductance,
+                        cross,
+                        d0,
+                        d1,
+                    } => {
+                        let [c0, c1] = mesh.face_cells[f];
+                        let (l0, l1) = (lam[c0 as usize], lam[c1 as usize]);
+                        let den = d1 * l0 + d0 * l1;
+                        let lf = if den > 0.0 {
+                            l0 * l1 * (d0 + d1) / den
+                        } else {
+                            0.5 * (l0 + l1)
+                        };
+                        FaceLaw::Diffusive {
+                            g: lf * conductance,
+                            cross: [lf * cross[0], lf * cross[1]],
                         }
-                        FaceLaw::Interface { .. } => {
-                            source[k] = FACE_VALUE | f as u32;
-                            (offset[k], None)
-                        }
-                        FaceLaw::Boundary {
-                            side, conductivity, ..
-                        } => {
-                            source[k] = FACE_VALUE | f as u32;
-                            match &model.sides[side as usize] {
-                                SideCondition::HeatFlux(q) => (
-                                    offset[k],
-                                    Some((conductivity > 0.0).then(|| q / conductivity)),
-                                ),
-                                _ => (offset[k], None),
-                            }
-                        }
-                    };
-                    let e = match e_override {
-                        // Neumann row (or none when λ = 0): no weight on the face value.
-                        Some(gradient) => {
-                            let n = mesh.face_normal[f];
-                            if let Some(g) = gradient {
-                                neumann[0] += n[0] * g;
-                                neumann[1] += n[1] * g;
-                                m00 += n[0] * n[0];
-                                m01 += n[0] * n[1];
-                                m11 += n[1] * n[1];
-                            }
-                            continue;
-                        }
-                        None => {
-                            let len = dot(d, d).sqrt();
-                            if len > 0.0 {
-                                inv_len[k] = 1.0 / len;
-                                [d[0] / len, d[1] / len]
-                            } else {
-                                [0.0; 2]
-                            }
-                        }
-                    };
-                    dir[k] = e;
-                    m00 += e[0] * e[0];
-                    m01 += e[0] * e[1];
-                    m11 += e[1] * e[1];
-                }
-                let det = m00 * m11 - m01 * m01;
-                if det.abs() <= 1e-12 * (m00 + m11).powi(2) {
-                    *weight = [[0.0; 2]; 3];
-                    return;
-                }
-                let inv = [[m11 / det, -m01 / det], [-m01 / det, m00 / det]];
-                let apply = |v: [f64; 2]| {
-                    [
-                        inv[0][0] * v[0] + inv[0][1] * v[1],
-                        inv[1][0] * v[0] + inv[1][1] * v[1],
-                    ]
+                    }
+                    FaceGeometry::Interface {
+                        area,
+                        solid_distance,
+                        fluid_first,
+                        owner,
+                    } => {
+                        let [c0, c1] = mesh.face_cells[f];
+                        let cf = if fluid_first { c0 } else { c1 } as usize;
+                        let dp = diameter.get(owner as usize).copied().unwrap_or_default();
+                        let h = exchange[cf].coefficient(porosity, &dp);
+                        let ks = if solid_distance > 0.0 {
+                            solid_lambda / solid_distance
+                        } else {
+                            0.0
+                        };
+                        let (g, wf) = if h + ks > 0.0 {
+                            (area * h * ks / (h + ks), h / (h + ks))
+                        } else {
+                            (0.0, 0.5)
+                        };
+                        let w0 = if fluid_first { wf } else { 1.0 - wf };
+                        FaceLaw::Interface { g, w0 }
+                    }
+                    FaceGeometry::Boundary { slot } => FaceLaw::Boundary { slot },
                 };
-                for k in 0..3 {
-                    let w = apply(dir[k]);
-                    weight[k] = [w[0] * inv_len[k], w[1] * inv_len[k]];
-                }
-                *constant = apply(neumann);
             });
     }
 
-    /// Per-cell sum of conductances and twice the advective outflow, and the resulting limit.
-    fn stability_limit(&self, model: &HeatModel, mesh: &PoreMesh, input: &FlowInput) -> f64 {
-        let start = &self.cell_channel_start;
+    /// Part of [`Self::prepare`]: S2S conductance λ_eff A_k / L_k with A_k = h b (A-Eq. 40),
+    /// λ_eff the mean of the two cells; zero for T2T channels, whose diffusion is part of the
+    /// face laws.
+    pub fn prepare_channels(&mut self, mesh: &PoreMesh) {
+        let ch = &mesh.channels;
+        let lam = &self.conductivity;
+        let b = mesh.thickness;
+        self.channel_conductance.resize(ch.len(), 0.0);
+        self.channel_conductance
+            .par_iter_mut()
+            .with_min_len(GRAIN)
+            .enumerate()
+            .for_each(|(k, g)| {
+                *g = match ch.kind[k] {
+                    ChannelKind::T2T => 0.0,
+                    ChannelKind::S2S => {
+                        let [a, c] = ch.cells[k];
+                        let lambda = 0.5 * (lam[a as usize] + lam[c as usize]);
+                        let l = ch.length[k];
+                        if l > 0.0 {
+                            lambda * ch.aperture[k] * b / l
+                        } else {
+                            0.0
+                        }
+                    }
+                };
+            });
+    }
+
+    /// Per-cell sum of conductances and of the advective outflow, and the resulting limit.
+    fn stability_limit(
+        &self,
+        model: &HeatModel,
+        geometry: &HeatGeometry,
+        mesh: &PoreMesh,
+        input: &FlowInput,
+    ) -> f64 {
+        let start = &geometry.cell_channel_start;
         (0..mesh.n_cells())
             .into_par_iter()
             .with_min_len(GRAIN)
@@ -604,13 +384,8 @@ impl HeatStepper {
                     let f = f as usize;
                     s += match self.face_law[f] {
                         FaceLaw::Diffusive { g, .. } | FaceLaw::Interface { g, .. } => g,
-                        FaceLaw::Boundary {
-                            side,
-                            conductivity,
-                            normal_distance,
-                            area,
-                            ..
-                        } => {
+                        FaceLaw::Boundary { slot } => {
+                            let bf = &geometry.boundary[slot as usize];
                             let m = input.boundary_mass_flux[f];
                             let adv = if m > 0.0 {
                                 2.0 * m * self.specific_heat[c]
@@ -618,15 +393,16 @@ impl HeatStepper {
                                 0.0
                             };
                             adv + boundary_conductance(
-                                &model.sides[side as usize],
-                                conductivity,
-                                normal_distance,
-                                area,
+                                &model.sides[bf.side as usize],
+                                self.conductivity[c],
+                                bf.normal_distance,
+                                bf.area,
                             )
                         }
                     };
                 }
-                for &(k, second) in &self.cell_channel[start[c] as usize..start[c + 1] as usize] {
+                for &(k, second) in &geometry.cell_channel[start[c] as usize..start[c + 1] as usize]
+                {
                     let k = k as usize;
                     s += self.channel_conductance[k];
                     let m = input.channel_mass_flux[k];
@@ -648,7 +424,16 @@ impl HeatStepper {
     /// Stage 1: face temperatures T̄_f for the Green–Gauss gradients: the arithmetic mean
     /// A-Eq. 42 inside a medium, the interface temperature of case IV, and the boundary values
     /// of cases I–III at time `t`.
-    pub fn face_temperatures(&mut self, model: &HeatModel, mesh: &PoreMesh, temp: &[f64], t: f64) {
+    pub fn face_temperatures(
+        &mut self,
+        model: &HeatModel,
+        geometry: &HeatGeometry,
+        mesh: &PoreMesh,
+        temp: &[f64],
+        t: f64,
+    ) {
+        let lam = &self.conductivity;
+        let boundary = &geometry.boundary;
         let sides: [f64; 5] = std::array::from_fn(|k| match &model.sides[k] {
             SideCondition::Temperature(s) => s.at(t),
             _ => 0.0,
@@ -664,32 +449,32 @@ impl HeatStepper {
                 *tf = match *law {
                     FaceLaw::Diffusive { .. } => 0.5 * (t0 + temp[c1 as usize]),
                     FaceLaw::Interface { w0, .. } => w0 * t0 + (1.0 - w0) * temp[c1 as usize],
-                    FaceLaw::Boundary {
-                        side,
-                        conductivity,
-                        normal_distance,
-                        ..
-                    } => match &model.sides[side as usize] {
-                        SideCondition::Temperature(_) => sides[side as usize],
-                        SideCondition::HeatFlux(q) => {
-                            if conductivity > 0.0 {
-                                t0 + normal_distance * q / conductivity
-                            } else {
-                                t0
+                    FaceLaw::Boundary { slot } => {
+                        let bf = &boundary[slot as usize];
+                        let (conductivity, normal_distance) =
+                            (lam[c0 as usize], bf.normal_distance);
+                        match &model.sides[bf.side as usize] {
+                            SideCondition::Temperature(_) => sides[bf.side as usize],
+                            SideCondition::HeatFlux(q) => {
+                                if conductivity > 0.0 {
+                                    t0 + normal_distance * q / conductivity
+                                } else {
+                                    t0
+                                }
+                            }
+                            SideCondition::Convective {
+                                coefficient,
+                                ambient,
+                            } => {
+                                let k = conductivity / normal_distance;
+                                if k + coefficient > 0.0 {
+                                    (k * t0 + coefficient * ambient) / (k + coefficient)
+                                } else {
+                                    t0
+                                }
                             }
                         }
-                        SideCondition::Convective {
-                            coefficient,
-                            ambient,
-                        } => {
-                            let k = conductivity / normal_distance;
-                            if k + coefficient > 0.0 {
-                                (k * t0 + coefficient * ambient) / (k + coefficient)
-                            } else {
-                                t0
-                            }
-                        }
-                    },
+                    }
                 };
             });
     }
@@ -699,11 +484,16 @@ impl HeatStepper {
     /// medium or to the face centroid for interface and boundary face values, and Neumann
     /// rows n · ∇T = q / λ on prescribed-flux faces; weights precomputed in `prepare`) or
     /// Green–Gauss (A-Eq. 41) with the face values of stage 1.
-    pub fn gradients(&mut self, model: &HeatModel, mesh: &PoreMesh, temp: &[f64]) {
+    pub fn gradients(
+        &mut self,
+        model: &HeatModel,
+        geometry: &HeatGeometry,
+        mesh: &PoreMesh,
+        temp: &[f64],
+    ) {
         let tf = &self.face_temperature;
-        let source = &self.stencil_source;
-        let weight = &self.stencil_weight;
-        let constant = &self.gradient_constant;
+        let source = &geometry.stencil_source;
+        let weight = &geometry.stencil_weight;
         let scheme = model.gradient;
         self.gradient
             .par_iter_mut()
@@ -714,7 +504,7 @@ impl HeatStepper {
                     GradientScheme::GreenGauss => green_gauss(mesh, tf, c),
                     GradientScheme::LeastSquares => {
                         let tc = temp[c];
-                        let mut s = constant[c];
+                        let mut s = [0.0; 2];
                         for k in 0..3 {
                             let dt = stencil_value(source[c][k], temp, tf) - tc;
                             s[0] += weight[c][k][0] * dt;
@@ -729,13 +519,13 @@ impl HeatStepper {
     /// Stage 3: Barth–Jespersen limiter ψ ∈ [0, 1] of each fluid cell's gradient, so that the
     /// reconstruction A-Eq. 48 at every face centroid stays within the range of the cell, its
     /// face neighbours (face values at interfaces and boundaries) and its S2S partners.
-    pub fn limiters(&mut self, mesh: &PoreMesh, temp: &[f64]) {
+    pub fn limiters(&mut self, geometry: &HeatGeometry, mesh: &PoreMesh, temp: &[f64]) {
         let tf = &self.face_temperature;
         let grad = &self.gradient;
-        let start = &self.cell_channel_start;
-        let partner = &self.cell_channel_partner;
-        let source = &self.stencil_source;
-        let offset = &self.stencil_offset;
+        let start = &geometry.cell_channel_start;
+        let partner = &geometry.cell_channel_partner;
+        let source = &geometry.stencil_source;
+        let offset = &geometry.stencil_offset;
         self.limiter
             .par_iter_mut()
             .with_min_len(GRAIN)
@@ -777,6 +567,7 @@ impl HeatStepper {
     pub fn face_heat(
         &mut self,
         model: &HeatModel,
+        geometry: &HeatGeometry,
         mesh: &PoreMesh,
         input: &FlowInput,
         temp: &[f64],
@@ -785,6 +576,8 @@ impl HeatStepper {
         let grad = &self.gradient;
         let psi = &self.limiter;
         let cp = &self.specific_heat;
+        let lam = &self.conductivity;
+        let boundary = &geometry.boundary;
         let t_ref = model.reference_temperature;
         let sides: [f64; 5] = std::array::from_fn(|k| match &model.sides[k] {
             SideCondition::Temperature(s) => s.at(t),
@@ -807,13 +600,14 @@ impl HeatStepper {
                         g * (temp[c1] - t0) + dot(cross, mean)
                     }
                     FaceLaw::Interface { g, .. } => g * (temp[c1 as usize] - t0),
-                    FaceLaw::Boundary {
-                        side,
-                        conductivity,
-                        normal_distance,
-                        area,
-                        tangent,
-                    } => {
+                    FaceLaw::Boundary { slot } => {
+                        let BoundaryFace {
+                            side,
+                            normal_distance,
+                            area,
+                            tangent,
+                        } = boundary[slot as usize];
+                        let conductivity = lam[c0];
                         let cond = &model.sides[side as usize];
                         // Temperature at the foot of the normal through the face centroid.
                         let t_foot = t0 + dot(grad[c0], tangent);
@@ -855,6 +649,7 @@ impl HeatStepper {
     pub fn channel_heat(
         &mut self,
         model: &HeatModel,
+        geometry: &HeatGeometry,
         mesh: &PoreMesh,
         input: &FlowInput,
         temp: &[f64],
@@ -863,7 +658,7 @@ impl HeatStepper {
         let psi = &self.limiter;
         let cp = &self.specific_heat;
         let g = &self.channel_conductance;
-        let points = &self.channel_point;
+        let points = &geometry.channel_point;
         let t_ref = model.reference_temperature;
         let ch = &mesh.channels;
         self.channel_heat
@@ -893,12 +688,12 @@ impl HeatStepper {
 
     /// Stage 6: T ← T + h (Σ heat in) / C per cell (A-Eqs. 39, 50), gathering face and channel
     /// heat in a fixed order.
-    pub fn advance(&mut self, mesh: &PoreMesh, temp: &mut [f64], h: f64) {
+    pub fn advance(&mut self, geometry: &HeatGeometry, mesh: &PoreMesh, temp: &mut [f64], h: f64) {
         let qf = &self.face_heat;
         let qc = &self.channel_heat;
         let cap = &self.capacity;
-        let start = &self.cell_channel_start;
-        let cell_channel = &self.cell_channel;
+        let start = &geometry.cell_channel_start;
+        let cell_channel = &geometry.cell_channel;
         temp.par_iter_mut()
             .with_min_len(GRAIN)
             .enumerate()
@@ -957,25 +752,12 @@ fn green_gauss(mesh: &PoreMesh, tf: &[f64], c: usize) -> [f64; 2] {
     [s[0] * inv, s[1] * inv]
 }
 
-/// Marks a stencil source as a face temperature (the low bits are the face index).
-const FACE_VALUE: u32 = 1 << 31;
-
 #[inline]
 fn stencil_value(source: u32, temp: &[f64], face_temperature: &[f64]) -> f64 {
     if source & FACE_VALUE != 0 {
         face_temperature[(source & !FACE_VALUE) as usize]
     } else {
         temp[source as usize]
-    }
-}
-
-fn face_cosine(mesh: &PoreMesh, f: usize, c0: usize, c1: usize) -> f64 {
-    let d = sub(mesh.cell_centroid[c1], mesh.cell_centroid[c0]);
-    let ds = dot(d, d).sqrt();
-    if ds > 0.0 {
-        dot(mesh.face_normal[f], d) / ds
-    } else {
-        0.0
     }
 }
 

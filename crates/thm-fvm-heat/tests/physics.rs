@@ -7,8 +7,8 @@ mod common;
 use common::table1_params;
 use thm_fvm_heat::properties::{REYNOLDS_SWITCH, nusselt};
 use thm_fvm_heat::{
-    BoundaryCondition, BoundaryParams, FlowInput, HeatError, HeatModel, HeatParams, HeatState,
-    HeatStepper, TemperatureSchedule, sphere_mean_temperatures,
+    BoundaryCondition, BoundaryParams, FlowInput, HeatError, HeatGeometry, HeatModel, HeatParams,
+    HeatState, HeatStepper, TemperatureSchedule, sphere_mean_temperatures,
 };
 use thm_vpn_mesh::{BoundarySide, CellKind, ChannelKind, NONE, PoreMesh};
 
@@ -33,16 +33,17 @@ fn solid_bar(nx: usize) -> PoreMesh {
 /// Runs to steady state explicitly and implicitly; returns both temperature fields.
 fn steady(mesh: &PoreMesh, params: &HeatParams) -> (Vec<f64>, Vec<f64>) {
     let model = HeatModel::new(params, mesh).unwrap();
+    let geometry = HeatGeometry::new(&model, mesh).unwrap();
     let input = FlowInput::liquid_at_rest(mesh, 1000.0, 1.2);
     let mut explicit = HeatState::uniform(mesh, 320.0);
     let mut stepper = HeatStepper::new();
     stepper
-        .step(&model, mesh, &input, &mut explicit, 12.0)
+        .step(&model, &geometry, mesh, &input, &mut explicit, 12.0)
         .unwrap();
     let mut implicit = HeatState::uniform(mesh, 320.0);
     for _ in 0..60 {
         stepper
-            .implicit_step(&model, mesh, &input, &mut implicit, 1.0)
+            .implicit_step(&model, &geometry, mesh, &input, &mut implicit, 1.0)
             .unwrap();
     }
     (explicit.temperature, implicit.temperature)
@@ -142,11 +143,12 @@ fn dirichlet_schedule_is_followed() {
         ),
     ]);
     let model = HeatModel::new(&params, &mesh).unwrap();
+    let geometry = HeatGeometry::new(&model, &mesh).unwrap();
     let input = FlowInput::liquid_at_rest(&mesh, 1000.0, 1.2);
     let mut state = HeatState::uniform(&mesh, 300.0);
     let mut stepper = HeatStepper::new();
     stepper
-        .step(&model, &mesh, &input, &mut state, 40.0)
+        .step(&model, &geometry, &mesh, &input, &mut state, 40.0)
         .unwrap();
     for t in &state.temperature {
         assert!((t - 310.0).abs() < 1e-6, "{t}");
@@ -170,6 +172,7 @@ fn fluid_solid_interface_uses_nusselt_coefficient() {
     .unwrap();
     let params = table1_params();
     let model = HeatModel::new(&params, &mesh).unwrap();
+    let geometry = HeatGeometry::new(&model, &mesh).unwrap();
     let input = FlowInput::liquid_at_rest(&mesh, 1000.0, 1.2);
     let (tf0, ts0) = (300.0, 340.0);
     let mut state = HeatState {
@@ -196,7 +199,9 @@ fn fluid_solid_interface_uses_nusselt_coefficient() {
     let c_s = mesh.cell_area[cs] * mesh.thickness * 2600.0 * 920.0;
     let mut stepper = HeatStepper::new();
     let dt = 1e-3;
-    let report = stepper.step(&model, &mesh, &input, &mut state, dt).unwrap();
+    let report = stepper
+        .step(&model, &geometry, &mesh, &input, &mut state, dt)
+        .unwrap();
     assert_eq!(report.substeps, 1);
     let expected_f = tf0 + dt * g * (ts0 - tf0) / c_f;
     let expected_s = ts0 - dt * g * (ts0 - tf0) / c_s;
@@ -255,6 +260,7 @@ fn s2s_channel_conducts_by_eq_40() {
     let mut params = table1_params();
     params.solid.conductivity = 0.0;
     let model = HeatModel::new(&params, &mesh).unwrap();
+    let geometry = HeatGeometry::new(&model, &mesh).unwrap();
     let input = FlowInput::liquid_at_rest(&mesh, 1000.0, 1.2);
     let mut state = HeatState {
         time: 0.0,
@@ -265,7 +271,9 @@ fn s2s_channel_conducts_by_eq_40() {
     let cap = |c: usize| mesh.cell_area[c] * mesh.thickness * 1000.0 * 4187.0;
     let dt = 1e-2;
     let mut stepper = HeatStepper::new();
-    stepper.step(&model, &mesh, &input, &mut state, dt).unwrap();
+    stepper
+        .step(&model, &geometry, &mesh, &input, &mut state, dt)
+        .unwrap();
     let q = g * 50.0;
     assert!((state.temperature[0] - (350.0 - dt * q / cap(0))).abs() < 1e-12 * 350.0);
     assert!((state.temperature[3] - (300.0 + dt * q / cap(3))).abs() < 1e-12 * 300.0);
@@ -371,6 +379,7 @@ fn bad_inputs_and_instability_are_typed_errors() {
         PoreMesh::structured_rectangle(2, 2, 1.0, 1.0, 1.0, 1.0, |_| CellKind::Fluid).unwrap();
     let params = table1_params();
     let model = HeatModel::new(&params, &mesh).unwrap();
+    let geometry = HeatGeometry::new(&model, &mesh).unwrap();
     let mut stepper = HeatStepper::new();
     let good = FlowInput::liquid_at_rest(&mesh, 1000.0, 1.2);
     let mut state = HeatState::uniform(&mesh, 300.0);
@@ -378,7 +387,7 @@ fn bad_inputs_and_instability_are_typed_errors() {
     let mut input = good.clone();
     input.liquid_fraction[3] = 1.5;
     assert!(matches!(
-        stepper.step(&model, &mesh, &input, &mut state, 1.0),
+        stepper.step(&model, &geometry, &mesh, &input, &mut state, 1.0),
         Err(HeatError::InputOutOfRange {
             quantity: "liquid_fraction",
             index: 3,
@@ -388,7 +397,7 @@ fn bad_inputs_and_instability_are_typed_errors() {
     let mut input = good.clone();
     input.channel_mass_flux.pop();
     assert!(matches!(
-        stepper.step(&model, &mesh, &input, &mut state, 1.0),
+        stepper.step(&model, &geometry, &mesh, &input, &mut state, 1.0),
         Err(HeatError::LengthMismatch {
             what: "channel_mass_flux",
             ..
@@ -397,20 +406,20 @@ fn bad_inputs_and_instability_are_typed_errors() {
     let mut short = state.clone();
     short.temperature.pop();
     assert!(matches!(
-        stepper.step(&model, &mesh, &good, &mut short, 1.0),
+        stepper.step(&model, &geometry, &mesh, &good, &mut short, 1.0),
         Err(HeatError::LengthMismatch {
             what: "temperature",
             ..
         })
     ));
     assert!(matches!(
-        stepper.step(&model, &mesh, &good, &mut state, -1.0),
+        stepper.step(&model, &geometry, &mesh, &good, &mut state, -1.0),
         Err(HeatError::ParameterOutOfRange { .. })
     ));
     let mut input = good.clone();
     input.channel_mass_flux[0] = 1e-3;
     assert!(matches!(
-        stepper.implicit_step(&model, &mesh, &input, &mut state, 1.0),
+        stepper.implicit_step(&model, &geometry, &mesh, &input, &mut state, 1.0),
         Err(HeatError::AdvectionInImplicitStep {
             what: "channel_mass_flux",
             index: 0,
@@ -425,8 +434,9 @@ fn bad_inputs_and_instability_are_typed_errors() {
         BoundaryCondition::HeatFlux { flux: 1e308 },
     )];
     let model = HeatModel::new(&p, &mesh).unwrap();
+    let geometry = HeatGeometry::new(&model, &mesh).unwrap();
     let err = stepper
-        .step(&model, &mesh, &good, &mut state, 1.0)
+        .step(&model, &geometry, &mesh, &good, &mut state, 1.0)
         .unwrap_err();
     assert!(
         matches!(

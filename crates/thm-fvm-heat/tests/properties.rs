@@ -5,7 +5,7 @@ mod common;
 
 use common::{random_input, random_mesh, random_temperatures, table1_params};
 use proptest::prelude::*;
-use thm_fvm_heat::{FlowInput, HeatModel, HeatState, HeatStepper};
+use thm_fvm_heat::{FlowInput, HeatGeometry, HeatModel, HeatState, HeatStepper};
 use thm_vpn_mesh::PoreMesh;
 
 fn energy(stepper: &HeatStepper, t: &[f64]) -> (f64, f64) {
@@ -42,10 +42,11 @@ proptest! {
     #[test]
     fn explicit_step_conserves_energy(seed in any::<u64>(), nx in 2usize..7, ny in 2usize..7) {
         let (mesh, model, input, mut state) = setup(seed, nx, ny, 2e-4);
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
         let mut stepper = HeatStepper::new();
-        stepper.prepare(&model, &mesh, &input, &state).unwrap();
+        stepper.prepare(&model, &geometry, &mesh, &input, &state).unwrap();
         let (e0, scale) = energy(&stepper, &state.temperature);
-        let report = stepper.step(&model, &mesh, &input, &mut state, 50.0).unwrap();
+        let report = stepper.step(&model, &geometry, &mesh, &input, &mut state, 50.0).unwrap();
         let (e1, _) = energy(&stepper, &state.temperature);
         let tol = 1e-14 * scale * (report.substeps as f64 + 1.0) * mesh.n_cells() as f64;
         prop_assert!((e1 - e0).abs() <= tol, "dE = {} J, tol {} J, {} substeps", e1 - e0, tol, report.substeps);
@@ -62,6 +63,7 @@ proptest! {
         let mut params = table1_params();
         params.liquid.conductivity = 0.0;
         let model = HeatModel::new(&params, &mesh).unwrap();
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
         let mut input = random_input(seed, &mesh, 2e-4);
         input.liquid_fraction.iter_mut().for_each(|a| *a = 1.0);
         input.liquid_density.iter_mut().for_each(|r| *r = 1000.0);
@@ -75,7 +77,7 @@ proptest! {
         let (lo, hi) = range(&state.temperature);
         let mut stepper = HeatStepper::new();
         for _ in 0..5 {
-            stepper.step(&model, &mesh, &input, &mut state, 20.0).unwrap();
+            stepper.step(&model, &geometry, &mesh, &input, &mut state, 20.0).unwrap();
             let (a, b) = range(&state.temperature);
             prop_assert!(a >= lo - 1e-9 && b <= hi + 1e-9, "range [{a}, {b}] left [{lo}, {hi}]");
         }
@@ -85,10 +87,11 @@ proptest! {
     #[test]
     fn implicit_step_conserves_energy(seed in any::<u64>(), nx in 2usize..7, ny in 2usize..7) {
         let (mesh, model, input, mut state) = setup(seed, nx, ny, 0.0);
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
         let mut stepper = HeatStepper::new();
-        stepper.prepare(&model, &mesh, &input, &state).unwrap();
+        stepper.prepare(&model, &geometry, &mesh, &input, &state).unwrap();
         let (e0, scale) = energy(&stepper, &state.temperature);
-        stepper.implicit_step(&model, &mesh, &input, &mut state, 500.0).unwrap();
+        stepper.implicit_step(&model, &geometry, &mesh, &input, &mut state, 500.0).unwrap();
         let (e1, _) = energy(&stepper, &state.temperature);
         prop_assert!((e1 - e0).abs() <= 1e-11 * scale, "dE = {} J of {} J", e1 - e0, scale);
     }
@@ -97,15 +100,16 @@ proptest! {
     #[test]
     fn serial_and_parallel_runs_are_bitwise_equal(seed in any::<u64>(), nx in 2usize..7, ny in 2usize..7) {
         let (mesh, model, input, state) = setup(seed, nx, ny, 2e-4);
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| {
                 let mut s = state.clone();
                 let mut stepper = HeatStepper::new();
-                stepper.step(&model, &mesh, &input, &mut s, 50.0).unwrap();
+                stepper.step(&model, &geometry, &mesh, &input, &mut s, 50.0).unwrap();
                 let mut s2 = s.clone();
                 let no_flux = FlowInput { channel_mass_flux: vec![0.0; input.channel_mass_flux.len()], ..input.clone() };
-                stepper.implicit_step(&model, &mesh, &no_flux, &mut s2, 100.0).unwrap();
+                stepper.implicit_step(&model, &geometry, &mesh, &no_flux, &mut s2, 100.0).unwrap();
                 (s, s2)
             })
         };
@@ -122,25 +126,26 @@ proptest! {
 #[test]
 fn save_restore_round_trip() {
     let (mesh, model, input, state) = setup(7, 5, 6, 2e-4);
+    let geometry = HeatGeometry::new(&model, &mesh).unwrap();
     let mut stepper = HeatStepper::new();
     let mut straight = state.clone();
     stepper
-        .step(&model, &mesh, &input, &mut straight, 20.0)
+        .step(&model, &geometry, &mesh, &input, &mut straight, 20.0)
         .unwrap();
     stepper
-        .step(&model, &mesh, &input, &mut straight, 20.0)
+        .step(&model, &geometry, &mesh, &input, &mut straight, 20.0)
         .unwrap();
 
     let mut first = state.clone();
     stepper
-        .step(&model, &mesh, &input, &mut first, 20.0)
+        .step(&model, &geometry, &mesh, &input, &mut first, 20.0)
         .unwrap();
     let text = serde_json::to_string(&first).unwrap();
     let mut restored: HeatState = serde_json::from_str(&text).unwrap();
     assert_eq!(restored, first);
     let mut fresh = HeatStepper::new();
     fresh
-        .step(&model, &mesh, &input, &mut restored, 20.0)
+        .step(&model, &geometry, &mesh, &input, &mut restored, 20.0)
         .unwrap();
     assert_eq!(restored.steps, straight.steps);
     for (a, b) in restored.temperature.iter().zip(&straight.temperature) {
@@ -154,4 +159,109 @@ fn save_restore_round_trip() {
     let input_text = serde_json::to_string(&input).unwrap();
     let input_back: FlowInput = serde_json::from_str(&input_text).unwrap();
     assert_eq!(input_back, input);
+}
+
+/// On a mesh large enough that every parallel pass splits into several tasks (more than
+/// twice the rayon grain of 2048 items), 1 and 2 threads give identical bits: the geometry
+/// (built and refreshed inside each pool), the explicit step with advection, and the
+/// implicit step.
+#[test]
+fn serial_and_parallel_runs_are_bitwise_equal_on_a_large_mesh() {
+    let (mut mesh, model, input, state) = setup(11, 48, 64, 2e-4);
+    assert!(mesh.n_cells() > 2 * 2048 && mesh.n_faces() > 2 * 2048);
+    // Move the interior vertices a little: update_positions must follow.
+    let moved: Vec<[f64; 2]> = mesh
+        .vertices
+        .iter()
+        .map(|&[x, y]| {
+            let interior = x > 1e-9 && x < 0.02 - 1e-9 && y > 1e-9 && y < 0.03 - 1e-9;
+            if interior {
+                [x + 2e-6 * (y * 900.0).sin(), y + 2e-6 * (x * 700.0).cos()]
+            } else {
+                [x, y]
+            }
+        })
+        .collect();
+    let run = |threads: usize, mesh: &PoreMesh| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let geometry = HeatGeometry::new(&model, mesh).unwrap();
+            let mut s = state.clone();
+            let mut stepper = HeatStepper::new();
+            stepper
+                .step(&model, &geometry, mesh, &input, &mut s, 0.05)
+                .unwrap();
+            let no_flux = FlowInput {
+                channel_mass_flux: vec![0.0; input.channel_mass_flux.len()],
+                ..input.clone()
+            };
+            let mut s2 = s.clone();
+            stepper
+                .implicit_step(&model, &geometry, mesh, &no_flux, &mut s2, 100.0)
+                .unwrap();
+            (s, s2)
+        })
+    };
+    let bits = |s: &HeatState| {
+        s.temperature
+            .iter()
+            .map(|t| t.to_bits())
+            .collect::<Vec<_>>()
+    };
+    let (a1, b1) = run(1, &mesh);
+    let (a2, b2) = run(2, &mesh);
+    assert_eq!(bits(&a1), bits(&a2));
+    assert_eq!(bits(&b1), bits(&b2));
+    mesh.vertices = moved;
+    mesh.update_geometry();
+    let (c1, _) = run(1, &mesh);
+    let (c2, _) = run(2, &mesh);
+    assert_eq!(bits(&c1), bits(&c2));
+    assert_ne!(
+        bits(&c1),
+        bits(&a1),
+        "the moved mesh must change the result"
+    );
+}
+
+/// After the vertices move, refreshing the positions of a geometry gives the same bits as a
+/// geometry built from scratch on the moved mesh; a geometry of another mesh is a typed
+/// error, not a panic.
+#[test]
+fn updated_geometry_equals_a_fresh_one() {
+    let (mut mesh, model, input, state) = setup(5, 6, 8, 2e-4);
+    let mut geometry = HeatGeometry::new(&model, &mesh).unwrap();
+    for v in &mut mesh.vertices {
+        let [x, y] = *v;
+        if x > 1e-9 && x < 0.02 - 1e-9 && y > 1e-9 && y < 0.03 - 1e-9 {
+            *v = [x + 1e-4 * (y * 300.0).sin(), y];
+        }
+    }
+    mesh.update_geometry();
+    geometry.update_positions(&model, &mesh).unwrap();
+    let fresh = HeatGeometry::new(&model, &mesh).unwrap();
+    let step = |g: &HeatGeometry| {
+        let mut s = state.clone();
+        HeatStepper::new()
+            .step(&model, g, &mesh, &input, &mut s, 20.0)
+            .unwrap();
+        s.temperature
+            .iter()
+            .map(|t| t.to_bits())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(step(&geometry), step(&fresh));
+    assert_eq!(geometry.porosity().to_bits(), fresh.porosity().to_bits());
+
+    let other = random_mesh(6, 5, 8);
+    let other_model = HeatModel::new(&table1_params(), &other).unwrap();
+    let other_geometry = HeatGeometry::new(&other_model, &other).unwrap();
+    let mut s = state.clone();
+    assert!(matches!(
+        HeatStepper::new().step(&model, &other_geometry, &mesh, &input, &mut s, 1.0),
+        Err(thm_fvm_heat::HeatError::LengthMismatch { .. })
+    ));
 }

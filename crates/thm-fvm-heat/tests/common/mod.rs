@@ -3,7 +3,9 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use thm_fvm_heat::{FlowInput, GradientScheme, HeatParams, PhaseParams, SolidParams};
+use thm_fvm_heat::{
+    FlowInput, GradientScheme, HeatParams, InterfaceModel, PhaseParams, SolidParams,
+};
 use thm_vpn_mesh::{CellKind, ChannelKind, NONE, PoreMesh};
 
 /// A structured rectangle with perturbed interior vertices, random fluid/solid kinds (solid
@@ -99,6 +101,7 @@ pub fn table1_params() -> HeatParams {
         boundaries: Vec::new(),
         stability_safety: 0.8,
         gradient: GradientScheme::LeastSquares,
+        interface: InterfaceModel::Nusselt,
     }
 }
 
