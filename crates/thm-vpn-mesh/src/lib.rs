@@ -135,9 +135,9 @@
 //! [`picture::write_mesh_png`] draws a mesh through `thm-io`: fluid cells blue, solid cells in
 //! a few sand shades (touching spheres differ), channels as lines. The verification case
 //! `vpn_mesh/paper_bar` writes the 20 × 80 mm bar to `target/verify/vpn_mesh/paper_bar/mesh.png`;
-//! `docs/img/vpn_mesh_bar.png` is a copy:
+//! `docs/images/vpn_mesh_bar.png` is a copy:
 //!
-//! ![VPN mesh of the 20 × 80 mm bar](../../docs/img/vpn_mesh_bar.png)
+//! ![VPN mesh of the 20 × 80 mm bar](../../docs/images/vpn_mesh_bar.png)
 //!
 //! ## Robustness
 //!

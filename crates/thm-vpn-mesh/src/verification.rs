@@ -234,7 +234,7 @@ fn paper_bar() -> Result<CaseOutput, CaseError> {
          channel: no pore touches them"
             .into(),
     );
-    // The picture of the mesh for the documentation (docs/img/vpn_mesh_bar.png is a copy).
+    // The picture of the mesh for the documentation (docs/images/vpn_mesh_bar.png is a copy).
     let path = case_dir().join("mesh.png");
     let style = PictureStyle {
         title: format!("20 x 80 mm bar, {n} segments"),
