@@ -268,15 +268,7 @@ impl HeatGeometry {
         self.stencil_offset.clear();
         self.stencil_offset.resize(n, [[0.0; 2]; 3]);
         // Spheres.
-        let n_spheres = mesh
-            .cell_kind
-            .iter()
-            .filter_map(|k| match k {
-                CellKind::Solid { owner } => Some(*owner as usize + 1),
-                CellKind::Fluid => None,
-            })
-            .max()
-            .unwrap_or(0);
+        let n_spheres = crate::spheres::sphere_count(mesh);
         self.sphere_radius.clear();
         self.sphere_radius.resize(n_spheres, 0.0);
         self.sphere_diameter_powers.clear();

@@ -20,15 +20,7 @@ pub fn sphere_mean_temperatures(
             got: temperature.len(),
         });
     }
-    let n_spheres = mesh
-        .cell_kind
-        .iter()
-        .filter_map(|k| match k {
-            CellKind::Solid { owner } => Some(*owner as usize + 1),
-            CellKind::Fluid => None,
-        })
-        .max()
-        .unwrap_or(0);
+    let n_spheres = sphere_count(mesh);
     // Σ A T and Σ A per sphere (thickness cancels).
     out.clear();
     out.resize(n_spheres, None);
@@ -47,4 +39,17 @@ pub fn sphere_mean_temperatures(
         }
     }
     Ok(())
+}
+
+/// Number of spheres the mesh's solid cells refer to: one more than the largest owner index
+/// (0 for a mesh without solid cells).
+pub(crate) fn sphere_count(mesh: &PoreMesh) -> usize {
+    mesh.cell_kind
+        .iter()
+        .filter_map(|k| match k {
+            CellKind::Solid { owner } => Some(*owner as usize + 1),
+            CellKind::Fluid => None,
+        })
+        .max()
+        .unwrap_or(0)
 }
