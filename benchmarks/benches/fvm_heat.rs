@@ -8,10 +8,7 @@
 //! Run: `cargo bench -p thm-benchmarks --bench fvm_heat`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use thm_fvm_heat::{
-    FlowInput, GradientScheme, HeatGeometry, HeatModel, HeatParams, HeatState, HeatStepper,
-    InterfaceModel, PhaseParams, SolidParams,
-};
+use thm_fvm_heat::{FlowInput, HeatGeometry, HeatModel, HeatParams, HeatState, HeatStepper};
 use thm_vpn_mesh::{CellKind, PoreMesh};
 
 fn setup() -> (PoreMesh, HeatModel, FlowInput, HeatState) {
@@ -32,28 +29,7 @@ fn setup() -> (PoreMesh, HeatModel, FlowInput, HeatState) {
     let n_fluid = mesh.cell_kind.iter().filter(|k| k.is_fluid()).count();
     assert_eq!(n_fluid, 100_000);
     assert_eq!(mesh.n_cells() - n_fluid, 100_000);
-    let params = HeatParams {
-        solid: SolidParams {
-            density: 2600.0,
-            specific_heat: 920.0,
-            conductivity: 3.7,
-        },
-        liquid: PhaseParams {
-            specific_heat: 4187.0,
-            conductivity: 0.6,
-            dynamic_viscosity: 10.02e-4,
-        },
-        gas: PhaseParams {
-            specific_heat: 1006.0,
-            conductivity: 0.0262,
-            dynamic_viscosity: 2.0507e-5,
-        },
-        reference_temperature: 278.16,
-        boundaries: Vec::new(),
-        stability_safety: 0.8,
-        gradient: GradientScheme::LeastSquares,
-        interface: InterfaceModel::Nusselt,
-    };
+    let params = HeatParams::paper_a_table_1();
     let model = HeatModel::new(&params, &mesh).unwrap();
     let mut input = FlowInput::liquid_at_rest(&mesh, 1000.0, 1.2);
     for k in 0..mesh.channels.len() {

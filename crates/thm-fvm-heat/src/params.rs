@@ -164,6 +164,36 @@ pub struct HeatParams {
     pub interface: InterfaceModel,
 }
 
+impl HeatParams {
+    /// Table 1 of Krzaczek et al. (2023): solid, water and air properties, reference
+    /// temperature 278.16 K, least-squares gradients, the Nusselt interface (case IV), no
+    /// boundary conditions (all boundaries adiabatic) and a stability safety factor of 0.8.
+    pub fn paper_a_table_1() -> Self {
+        Self {
+            solid: SolidParams {
+                density: 2600.0,
+                specific_heat: 920.0,
+                conductivity: 3.7,
+            },
+            liquid: PhaseParams {
+                specific_heat: 4187.0,
+                conductivity: 0.6,
+                dynamic_viscosity: 10.02e-4,
+            },
+            gas: PhaseParams {
+                specific_heat: 1006.0,
+                conductivity: 0.0262,
+                dynamic_viscosity: 2.0507e-5,
+            },
+            reference_temperature: 278.16,
+            boundaries: Vec::new(),
+            stability_safety: 0.8,
+            gradient: GradientScheme::LeastSquares,
+            interface: InterfaceModel::Nusselt,
+        }
+    }
+}
+
 /// Validated solid properties.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Solid {

@@ -3,9 +3,7 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use thm_fvm_heat::{
-    FlowInput, GradientScheme, HeatParams, InterfaceModel, PhaseParams, SolidParams,
-};
+use thm_fvm_heat::{FlowInput, HeatParams};
 use thm_vpn_mesh::{CellKind, ChannelKind, NONE, PoreMesh};
 
 /// A structured rectangle with perturbed interior vertices, random fluid/solid kinds (solid
@@ -81,28 +79,7 @@ pub fn random_mesh(seed: u64, nx: usize, ny: usize) -> PoreMesh {
 
 /// Table 1 properties (solid, water, air), no boundary conditions (all adiabatic).
 pub fn table1_params() -> HeatParams {
-    HeatParams {
-        solid: SolidParams {
-            density: 2600.0,
-            specific_heat: 920.0,
-            conductivity: 3.7,
-        },
-        liquid: PhaseParams {
-            specific_heat: 4187.0,
-            conductivity: 0.6,
-            dynamic_viscosity: 10.02e-4,
-        },
-        gas: PhaseParams {
-            specific_heat: 1006.0,
-            conductivity: 0.0262,
-            dynamic_viscosity: 2.0507e-5,
-        },
-        reference_temperature: 278.16,
-        boundaries: Vec::new(),
-        stability_safety: 0.8,
-        gradient: GradientScheme::LeastSquares,
-        interface: InterfaceModel::Nusselt,
-    }
+    HeatParams::paper_a_table_1()
 }
 
 /// Random phase fractions and densities; random divergence-free channel mass fluxes of size
