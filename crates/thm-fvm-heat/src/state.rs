@@ -107,18 +107,11 @@ impl FlowInput {
     /// Whether the entries of fluid cell `c` are in range (lengths checked).
     #[inline]
     pub(crate) fn fluid_entry_ok(&self, c: usize) -> bool {
-        let (a, rq, rp) = (
+        fluid_entry_ok(
             self.liquid_fraction[c],
             self.liquid_density[c],
             self.gas_density[c],
-        );
-        a.is_finite()
-            && (0.0..=1.0).contains(&a)
-            && rq.is_finite()
-            && rq >= 0.0
-            && rp.is_finite()
-            && rp >= 0.0
-            && a * rq + (1.0 - a) * rp > 0.0
+        )
     }
 
     /// The error for a fluid cell whose entries are not in range.
@@ -183,4 +176,17 @@ impl FlowInput {
         }
         Ok(())
     }
+}
+
+/// Whether a fluid cell's liquid fraction `a` and phase densities `rq`, `rp` are in range:
+/// a ∈ [0, 1], ρ ∈ [0, ∞), and a positive mixture density.
+#[inline]
+pub(crate) fn fluid_entry_ok(a: f64, rq: f64, rp: f64) -> bool {
+    // Comparisons with NaN are false: a ∈ [0, 1] and ρ ∈ [0, ∞) exclude NaN and ∞. The
+    // terms are joined with `&` (no short circuit), as this runs for every fluid cell every
+    // step.
+    (0.0..=1.0).contains(&a)
+        & (0.0..f64::INFINITY).contains(&rq)
+        & (0.0..f64::INFINITY).contains(&rp)
+        & (a * rq + (1.0 - a) * rp > 0.0)
 }

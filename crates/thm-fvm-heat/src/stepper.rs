@@ -20,6 +20,7 @@ use crate::geometry::{
 };
 use crate::params::{GradientScheme, HeatModel, SideCondition};
 use crate::properties::ExchangeFactors;
+use crate::state::fluid_entry_ok;
 use crate::{FlowInput, HeatError, HeatGeometry, HeatState};
 
 pub use crate::geometry::MIN_FACE_COSINE;
@@ -273,32 +274,37 @@ impl HeatStepper {
             .into_par_iter()
             .enumerate()
             .map(|(chunk, (cap, lam, cp, exchange))| {
+                // Chunk-local views of the same length as the outputs.
+                let (lo, len) = (chunk * GRAIN, cap.len());
+                let temp = &temp[lo..lo + len];
+                let area = &mesh.cell_area[lo..lo + len];
+                let flags = &flags[lo..lo + len];
+                let alpha = &input.liquid_fraction[lo..lo + len];
+                let rho_q = &input.liquid_density[lo..lo + len];
+                let rho_p = &input.gas_density[lo..lo + len];
                 let (mut bad_temperature, mut bad_fluid) = (None, None);
-                for i in 0..cap.len() {
-                    let c = chunk * GRAIN + i;
-                    if bad_temperature.is_none() && !temperature_ok(temp[c]) {
-                        bad_temperature = Some(c);
+                for i in 0..len {
+                    if bad_temperature.is_none() && !temperature_ok(temp[i]) {
+                        bad_temperature = Some(lo + i);
                     }
-                    let volume = mesh.cell_area[c] * b;
-                    let flag = flags[c];
+                    let volume = area[i] * b;
+                    let flag = flags[i];
                     if flag & CELL_FLUID == 0 {
                         cap[i] = volume * solid.volumetric_heat_capacity();
                         lam[i] = solid.conductivity;
                         cp[i] = solid.specific_heat;
                         continue;
                     }
-                    if bad_fluid.is_none() && !input.fluid_entry_ok(c) {
-                        bad_fluid = Some(c);
+                    let (a, rq, rp) = (alpha[i], rho_q[i], rho_p[i]);
+                    if bad_fluid.is_none() && !fluid_entry_ok(a, rq, rp) {
+                        bad_fluid = Some(lo + i);
                     }
-                    let mix = model.fluid_mixture(
-                        input.liquid_fraction[c],
-                        input.liquid_density[c],
-                        input.gas_density[c],
-                    );
+                    let mix = model.fluid_mixture(a, rq, rp);
                     cap[i] = volume * mix.volumetric_heat_capacity;
                     lam[i] = mix.conductivity;
                     cp[i] = mix.specific_heat;
                     if flag & CELL_INTERFACE != 0 {
+                        let c = lo + i;
                         let mut speed = 0.0f64;
                         for &(k, _) in &cell_channel[start[c] as usize..start[c + 1] as usize] {
                             let k = k as usize;
@@ -407,66 +413,83 @@ impl HeatStepper {
     ) -> f64 {
         let start = &geometry.cell_channel_start;
         let lam = &self.conductivity;
-        (0..mesh.n_cells())
+        let n = mesh.n_cells();
+        (0..n.div_ceil(GRAIN))
             .into_par_iter()
-            .with_min_len(GRAIN)
-            .map(|c| {
-                let mut s = 0.0;
-                let flag = geometry.cell_flags[c];
-                for (j, &f) in mesh.cell_faces[c].iter().enumerate() {
-                    let f = f as usize;
-                    s += match geometry.face[f] {
-                        FaceGeometry::Diffusive {
-                            conductance,
-                            d0,
-                            d1,
-                            ..
-                        } => {
-                            let other = lam[geometry.stencil_source[c][j] as usize];
-                            let lf = if flag & (CELL_FIRST << j) != 0 {
-                                face_conductivity(lam[c], other, d0, d1)
-                            } else {
-                                face_conductivity(other, lam[c], d0, d1)
-                            };
-                            lf * conductance
-                        }
-                        FaceGeometry::Interface { index, .. } => {
-                            self.interface_law[index as usize].g
-                        }
-                        FaceGeometry::Boundary { slot } => {
-                            let bf = &geometry.boundary[slot as usize];
-                            let m = input.boundary_mass_flux[f];
-                            let adv = if m > 0.0 {
-                                2.0 * m * self.specific_heat[c]
-                            } else {
-                                0.0
-                            };
-                            adv + boundary_conductance(
-                                &model.sides[bf.side as usize],
-                                lam[c],
-                                bf.normal_distance,
-                                bf.area,
-                            )
-                        }
-                    };
-                }
-                for &(k, second) in &geometry.cell_channel[start[c] as usize..start[c + 1] as usize]
+            .map(|chunk| {
+                let (lo, hi) = (chunk * GRAIN, ((chunk + 1) * GRAIN).min(n));
+                let mut best: Option<f64> = None;
+                for (i, (((((faces, &flag), source), &cap), &cp), &lc)) in mesh.cell_faces[lo..hi]
+                    .iter()
+                    .zip(&geometry.cell_flags[lo..hi])
+                    .zip(&geometry.stencil_source[lo..hi])
+                    .zip(&self.capacity[lo..hi])
+                    .zip(&self.specific_heat[lo..hi])
+                    .zip(&lam[lo..hi])
+                    .enumerate()
                 {
-                    let k = k as usize;
-                    s += self.channel_conductance[k];
-                    let m = input.channel_mass_flux[k];
-                    let out = if second { -m } else { m };
-                    if out > 0.0 {
-                        s += ADVECTIVE_FACTOR * out * self.specific_heat[c];
+                    let c = lo + i;
+                    let mut s = 0.0;
+                    for (j, &f) in faces.iter().enumerate() {
+                        let f = f as usize;
+                        s += match geometry.face[f] {
+                            FaceGeometry::Diffusive {
+                                conductance,
+                                d0,
+                                d1,
+                                ..
+                            } => {
+                                let other = lam[source[j] as usize];
+                                let lf = if flag & (CELL_FIRST << j) != 0 {
+                                    face_conductivity(lc, other, d0, d1)
+                                } else {
+                                    face_conductivity(other, lc, d0, d1)
+                                };
+                                lf * conductance
+                            }
+                            FaceGeometry::Interface { index, .. } => {
+                                self.interface_law[index as usize].g
+                            }
+                            FaceGeometry::Boundary { slot } => {
+                                let bf = &geometry.boundary[slot as usize];
+                                let m = input.boundary_mass_flux[f];
+                                let adv = if m > 0.0 { 2.0 * m * cp } else { 0.0 };
+                                adv + boundary_conductance(
+                                    &model.sides[bf.side as usize],
+                                    lc,
+                                    bf.normal_distance,
+                                    bf.area,
+                                )
+                            }
+                        };
                     }
+                    for &(k, second) in
+                        &geometry.cell_channel[start[c] as usize..start[c + 1] as usize]
+                    {
+                        let k = k as usize;
+                        s += self.channel_conductance[k];
+                        let m = input.channel_mass_flux[k];
+                        let out = if second { -m } else { m };
+                        if out > 0.0 {
+                            s += ADVECTIVE_FACTOR * out * cp;
+                        }
+                    }
+                    let limit = if s > 0.0 { cap / s } else { f64::INFINITY };
+                    best = Some(match best {
+                        Some(b) if b.total_cmp(&limit).is_le() => b,
+                        _ => limit,
+                    });
                 }
-                if s > 0.0 {
-                    self.capacity[c] / s
-                } else {
-                    f64::INFINITY
-                }
+                best
             })
-            .min_by(|a, b| a.total_cmp(b))
+            .reduce(
+                || None,
+                |a, b| match (a, b) {
+                    (Some(x), Some(y)) => Some(if x.total_cmp(&y).is_le() { x } else { y }),
+                    (x, None) => x,
+                    (None, y) => y,
+                },
+            )
             .unwrap_or(f64::INFINITY)
     }
 
@@ -558,54 +581,86 @@ impl HeatStepper {
         let start = &geometry.extra_partner_start;
         let partner = &geometry.extra_partner;
         let scheme = model.gradient;
-        (&mut self.gradient, &mut self.limiter)
+        (
+            self.gradient.par_chunks_mut(GRAIN),
+            self.limiter.par_chunks_mut(GRAIN),
+        )
             .into_par_iter()
-            .with_min_len(GRAIN)
             .enumerate()
-            .for_each(|(c, (g, psi))| {
-                let tc = temp[c];
-                let src = source[c];
-                let v = src.map(|s| stencil_value(s, temp, tv));
-                let grad = match scheme {
-                    GradientScheme::LeastSquares => {
-                        let mut s = [0.0; 2];
-                        for k in 0..3 {
-                            let dt = v[k] - tc;
-                            s[0] += weight[c][k][0] * dt;
-                            s[1] += weight[c][k][1] * dt;
+            .for_each(|(chunk, (gradient, limiter))| {
+                let lo = chunk * GRAIN;
+                let hi = lo + gradient.len();
+                for (i, ((((((g, psi), &tc), src), w), offset), &flag)) in gradient
+                    .iter_mut()
+                    .zip(limiter.iter_mut())
+                    .zip(&temp[lo..hi])
+                    .zip(&source[lo..hi])
+                    .zip(&weight[lo..hi])
+                    .zip(&offset[lo..hi])
+                    .zip(&flags[lo..hi])
+                    .enumerate()
+                {
+                    let c = lo + i;
+                    let v = src.map(|s| stencil_value(s, temp, tv));
+                    let grad = match scheme {
+                        GradientScheme::LeastSquares => {
+                            let mut s = [0.0; 2];
+                            for k in 0..3 {
+                                let dt = v[k] - tc;
+                                s[0] += w[k][0] * dt;
+                                s[1] += w[k][1] * dt;
+                            }
+                            s
                         }
-                        s
-                    }
-                    GradientScheme::GreenGauss => green_gauss(mesh, flags[c], c, tc, &src, &v),
-                };
-                *g = grad;
-                if flags[c] & CELL_FLUID == 0 {
-                    *psi = 1.0;
-                    return;
+                        GradientScheme::GreenGauss => green_gauss(mesh, flag, c, tc, src, &v),
+                    };
+                    *g = grad;
+                    *psi = if flag & CELL_FLUID == 0 {
+                        1.0
+                    } else {
+                        let partners = &partner[start[c] as usize..start[c + 1] as usize];
+                        limiter_of(tc, &v, partners, temp, grad, offset)
+                    };
                 }
-                let (mut lo, mut hi) = (tc, tc);
-                for &value in &v {
-                    lo = lo.min(value);
-                    hi = hi.max(value);
-                }
-                for &other in &partner[start[c] as usize..start[c + 1] as usize] {
-                    let value = temp[other as usize];
-                    lo = lo.min(value);
-                    hi = hi.max(value);
-                }
-                let mut p = 1.0f64;
-                for r in &offset[c] {
-                    let d = dot(grad, *r);
-                    if d > 0.0 {
-                        p = p.min((hi - tc) / d);
-                    } else if d < 0.0 {
-                        p = p.min((lo - tc) / d);
-                    }
-                }
-                *psi = p.clamp(0.0, 1.0);
             });
     }
+}
 
+/// Barth–Jespersen ψ ∈ [0, 1] of a fluid cell at `tc` with gradient `grad`: the bounds are
+/// the cell, its stencil values `v` and the temperatures of its extra `partners`; `offset`
+/// are the face centroids relative to the cell centroid.
+#[inline]
+fn limiter_of(
+    tc: f64,
+    v: &[f64; 3],
+    partners: &[u32],
+    temp: &[f64],
+    grad: [f64; 2],
+    offset: &[[f64; 2]; 3],
+) -> f64 {
+    let (mut lo, mut hi) = (tc, tc);
+    for &value in v.iter() {
+        lo = lo.min(value);
+        hi = hi.max(value);
+    }
+    for &other in partners {
+        let value = temp[other as usize];
+        lo = lo.min(value);
+        hi = hi.max(value);
+    }
+    let mut p = 1.0f64;
+    for r in offset {
+        let d = dot(grad, *r);
+        if d > 0.0 {
+            p = p.min((hi - tc) / d);
+        } else if d < 0.0 {
+            p = p.min((lo - tc) / d);
+        }
+    }
+    p.clamp(0.0, 1.0)
+}
+
+impl HeatStepper {
     /// Stage 3: heat into the first cell of each face [W]: A-Eq. 47 inside a medium, the
     /// series conductance at fluid–solid interfaces, cases I–III and advection through open
     /// boundary faces.
@@ -756,22 +811,35 @@ impl HeatStepper {
         let flags = &geometry.cell_flags;
         let start = &geometry.cell_channel_start;
         let cell_channel = &geometry.cell_channel;
-        temp.par_chunks_mut(GRAIN)
+        (
+            temp.par_chunks_mut(GRAIN),
+            mesh.cell_faces.par_chunks(GRAIN),
+            flags.par_chunks(GRAIN),
+            cap.par_chunks(GRAIN),
+        )
+            .into_par_iter()
             .enumerate()
-            .map(|(chunk, temp)| {
+            .map(|(chunk, (temp, faces, flags, cap))| {
+                let lo = chunk * GRAIN;
+                let start = &start[lo..=lo + temp.len()];
                 let mut bad = None;
-                for (i, t) in temp.iter_mut().enumerate() {
-                    let c = chunk * GRAIN + i;
-                    let flag = flags[c];
+                for (i, ((((t, faces), &flag), &cap), range)) in temp
+                    .iter_mut()
+                    .zip(faces)
+                    .zip(flags)
+                    .zip(cap)
+                    .zip(start.windows(2))
+                    .enumerate()
+                {
                     let mut s = 0.0;
-                    for (j, &f) in mesh.cell_faces[c].iter().enumerate() {
+                    for (j, &f) in faces.iter().enumerate() {
                         if flag & (CELL_FIRST << j) != 0 {
                             s += qf[f as usize];
                         } else {
                             s -= qf[f as usize];
                         }
                     }
-                    for &(k, second) in &cell_channel[start[c] as usize..start[c + 1] as usize] {
+                    for &(k, second) in &cell_channel[range[0] as usize..range[1] as usize] {
                         let q = qc[k as usize];
                         if second {
                             s += q;
@@ -779,9 +847,9 @@ impl HeatStepper {
                             s -= q;
                         }
                     }
-                    *t += h * s / cap[c];
+                    *t += h * s / cap;
                     if bad.is_none() && !t.is_finite() {
-                        bad = Some(c);
+                        bad = Some(lo + i);
                     }
                 }
                 bad
@@ -838,7 +906,8 @@ fn green_gauss(
 
 #[inline]
 fn temperature_ok(t: f64) -> bool {
-    t.is_finite() && t > 0.0
+    // Finite and > 0 K (false for NaN).
+    (t > 0.0) & (t < f64::INFINITY)
 }
 
 #[inline]
