@@ -684,71 +684,76 @@ impl HeatStepper {
             SideCondition::Temperature(s) => s.at(t),
             _ => 0.0,
         });
-        self.face_heat
-            .par_iter_mut()
-            .with_min_len(GRAIN)
+        (
+            self.face_heat.par_chunks_mut(GRAIN),
+            mesh.face_cells.par_chunks(GRAIN),
+            geometry.face.par_chunks(GRAIN),
+        )
+            .into_par_iter()
             .enumerate()
-            .zip(geometry.face.par_iter())
-            .for_each(|((f, q), geo)| {
-                let [c0, c1] = mesh.face_cells[f];
-                let c0 = c0 as usize;
-                let t0 = temp[c0];
-                *q = match *geo {
-                    FaceGeometry::Diffusive {
-                        conductance,
-                        cross,
-                        d0,
-                        d1,
-                    } => {
-                        let c1 = c1 as usize;
-                        let lf = face_conductivity(lam[c0], lam[c1], d0, d1);
-                        let (g0, g1) = (grad[c0], grad[c1]);
-                        let mean = [0.5 * (g0[0] + g1[0]), 0.5 * (g0[1] + g1[1])];
-                        lf * conductance * (temp[c1] - t0)
-                            + dot([lf * cross[0], lf * cross[1]], mean)
-                    }
-                    FaceGeometry::Interface { index, .. } => {
-                        law[index as usize].g * (temp[c1 as usize] - t0)
-                    }
-                    FaceGeometry::Boundary { slot } => {
-                        let BoundaryFace {
-                            side,
-                            normal_distance,
-                            area,
-                            tangent,
-                        } = boundary[slot as usize];
-                        let conductivity = lam[c0];
-                        let cond = &model.sides[side as usize];
-                        // Temperature at the foot of the normal through the face centroid.
-                        let t_foot = t0 + dot(grad[c0], tangent);
-                        let diffusive = match cond {
-                            SideCondition::Temperature(_) => {
-                                conductivity * area / normal_distance
-                                    * (sides[side as usize] - t_foot)
-                            }
-                            SideCondition::HeatFlux(flux) => flux * area,
-                            SideCondition::Convective { ambient, .. } => {
-                                boundary_conductance(cond, conductivity, normal_distance, area)
-                                    * (ambient - t_foot)
-                            }
-                        };
-                        let m = input.boundary_mass_flux[f];
-                        let advective = if m > 0.0 {
-                            let r = sub(mesh.face_centroid[f], mesh.cell_centroid[c0]);
-                            let tface = t0 + psi[c0] * dot(grad[c0], r);
-                            -m * cp[c0] * (tface - t_ref)
-                        } else if m < 0.0 {
-                            let t_in = match cond {
-                                SideCondition::Temperature(_) => sides[side as usize],
-                                _ => t0,
+            .for_each(|(chunk, (heat, cells, faces))| {
+                for (i, ((q, &[c0, c1]), geo)) in heat.iter_mut().zip(cells).zip(faces).enumerate()
+                {
+                    let f = chunk * GRAIN + i;
+                    let c0 = c0 as usize;
+                    let t0 = temp[c0];
+                    *q = match *geo {
+                        FaceGeometry::Diffusive {
+                            conductance,
+                            cross,
+                            d0,
+                            d1,
+                        } => {
+                            let c1 = c1 as usize;
+                            let lf = face_conductivity(lam[c0], lam[c1], d0, d1);
+                            let (g0, g1) = (grad[c0], grad[c1]);
+                            let mean = [0.5 * (g0[0] + g1[0]), 0.5 * (g0[1] + g1[1])];
+                            lf * conductance * (temp[c1] - t0)
+                                + dot([lf * cross[0], lf * cross[1]], mean)
+                        }
+                        FaceGeometry::Interface { index, .. } => {
+                            law[index as usize].g * (temp[c1 as usize] - t0)
+                        }
+                        FaceGeometry::Boundary { slot } => {
+                            let BoundaryFace {
+                                side,
+                                normal_distance,
+                                area,
+                                tangent,
+                            } = boundary[slot as usize];
+                            let conductivity = lam[c0];
+                            let cond = &model.sides[side as usize];
+                            // Temperature at the foot of the normal through the face centroid.
+                            let t_foot = t0 + dot(grad[c0], tangent);
+                            let diffusive = match cond {
+                                SideCondition::Temperature(_) => {
+                                    conductivity * area / normal_distance
+                                        * (sides[side as usize] - t_foot)
+                                }
+                                SideCondition::HeatFlux(flux) => flux * area,
+                                SideCondition::Convective { ambient, .. } => {
+                                    boundary_conductance(cond, conductivity, normal_distance, area)
+                                        * (ambient - t_foot)
+                                }
                             };
-                            -m * cp[c0] * (t_in - t_ref)
-                        } else {
-                            0.0
-                        };
-                        diffusive + advective
-                    }
-                };
+                            let m = input.boundary_mass_flux[f];
+                            let advective = if m > 0.0 {
+                                let r = sub(mesh.face_centroid[f], mesh.cell_centroid[c0]);
+                                let tface = t0 + psi[c0] * dot(grad[c0], r);
+                                -m * cp[c0] * (tface - t_ref)
+                            } else if m < 0.0 {
+                                let t_in = match cond {
+                                    SideCondition::Temperature(_) => sides[side as usize],
+                                    _ => t0,
+                                };
+                                -m * cp[c0] * (t_in - t_ref)
+                            } else {
+                                0.0
+                            };
+                            diffusive + advective
+                        }
+                    };
+                }
             });
     }
 
@@ -771,28 +776,41 @@ impl HeatStepper {
         let points = &geometry.channel_point;
         let t_ref = model.reference_temperature;
         let ch = &mesh.channels;
-        self.channel_heat
-            .par_iter_mut()
-            .with_min_len(GRAIN)
-            .enumerate()
-            .for_each(|(k, q)| {
-                let [a, b] = ch.cells[k].map(|c| c as usize);
-                let m = input.channel_mass_flux[k];
-                let adv = if m != 0.0 {
-                    let up = if m > 0.0 { a } else { b };
-                    let tf = match ch.kind[k] {
-                        ChannelKind::T2T => {
-                            let r = sub(points[k], mesh.cell_centroid[up]);
-                            temp[up] + psi[up] * dot(grad[up], r)
-                        }
-                        // No face: first-order upwind.
-                        ChannelKind::S2S => temp[up],
+        (
+            self.channel_heat.par_chunks_mut(GRAIN),
+            ch.cells.par_chunks(GRAIN),
+            ch.kind.par_chunks(GRAIN),
+            input.channel_mass_flux.par_chunks(GRAIN),
+            points.par_chunks(GRAIN),
+            g.par_chunks(GRAIN),
+        )
+            .into_par_iter()
+            .for_each(|(heat, cells, kinds, fluxes, points, g)| {
+                for (((((q, cells), kind), &m), point), &g) in heat
+                    .iter_mut()
+                    .zip(cells)
+                    .zip(kinds)
+                    .zip(fluxes)
+                    .zip(points)
+                    .zip(g)
+                {
+                    let [a, b] = cells.map(|c| c as usize);
+                    let adv = if m != 0.0 {
+                        let up = if m > 0.0 { a } else { b };
+                        let tf = match kind {
+                            ChannelKind::T2T => {
+                                let r = sub(*point, mesh.cell_centroid[up]);
+                                temp[up] + psi[up] * dot(grad[up], r)
+                            }
+                            // No face: first-order upwind.
+                            ChannelKind::S2S => temp[up],
+                        };
+                        m * cp[up] * (tf - t_ref)
+                    } else {
+                        0.0
                     };
-                    m * cp[up] * (tf - t_ref)
-                } else {
-                    0.0
-                };
-                *q = adv + g[k] * (temp[a] - temp[b]);
+                    *q = adv + g * (temp[a] - temp[b]);
+                }
             });
     }
 
