@@ -72,12 +72,15 @@ fn bench(c: &mut Criterion) {
         group.bench_function(format!("explicit_substep_{threads}_threads"), |b| {
             b.iter(|| {
                 pool.install(|| {
-                    stepper.face_temperatures(&model, g, &mesh, &s.temperature, 0.0);
+                    stepper.face_values(&model, g, &mesh, &s.temperature, 0.0);
                     stepper.gradients(&model, g, &mesh, &s.temperature);
-                    stepper.limiters(g, &mesh, &s.temperature);
                     stepper.face_heat(&model, g, &mesh, &input, &s.temperature, 0.0);
                     stepper.channel_heat(&model, g, &mesh, &input, &s.temperature);
-                    stepper.advance(g, &mesh, &mut s.temperature, dt * 1e-6);
+                    assert!(
+                        stepper
+                            .advance(g, &mesh, &mut s.temperature, dt * 1e-6)
+                            .is_none()
+                    );
                 })
             })
         });
@@ -116,9 +119,8 @@ fn bench(c: &mut Criterion) {
     let mut stepper = HeatStepper::new();
     let mut s = state.clone();
     stepper.prepare(&model, g, &mesh, &input, &s).unwrap();
-    stepper.face_temperatures(&model, g, &mesh, &s.temperature, 0.0);
+    stepper.face_values(&model, g, &mesh, &s.temperature, 0.0);
     stepper.gradients(&model, g, &mesh, &s.temperature);
-    stepper.limiters(g, &mesh, &s.temperature);
     group.bench_function("prepare", |b| {
         b.iter(|| pool.install(|| stepper.prepare(&model, g, &mesh, &input, &s).unwrap()))
     });
@@ -126,22 +128,22 @@ fn bench(c: &mut Criterion) {
         b.iter(|| input.validate(&mesh).unwrap())
     });
     group.bench_function("prepare_cells", |b| {
-        b.iter(|| pool.install(|| stepper.prepare_cells(&model, g, &mesh, &input)))
+        b.iter(|| pool.install(|| stepper.prepare_cells(&model, g, &mesh, &input, &s.temperature)))
     });
-    group.bench_function("prepare_faces", |b| {
-        b.iter(|| pool.install(|| stepper.prepare_faces(&model, g, &mesh)))
+    group.bench_function("prepare_interfaces", |b| {
+        b.iter(|| pool.install(|| stepper.prepare_interfaces(&model, g, &mesh)))
     });
     group.bench_function("prepare_channels", |b| {
         b.iter(|| pool.install(|| stepper.prepare_channels(&mesh)))
     });
-    group.bench_function("face_temperatures", |b| {
-        b.iter(|| pool.install(|| stepper.face_temperatures(&model, g, &mesh, &s.temperature, 0.0)))
+    group.bench_function("stability_limit", |b| {
+        b.iter(|| pool.install(|| stepper.stability_limit(&model, g, &mesh, &input)))
     });
-    group.bench_function("gradients", |b| {
+    group.bench_function("face_values", |b| {
+        b.iter(|| pool.install(|| stepper.face_values(&model, g, &mesh, &s.temperature, 0.0)))
+    });
+    group.bench_function("gradients_and_limiters", |b| {
         b.iter(|| pool.install(|| stepper.gradients(&model, g, &mesh, &s.temperature)))
-    });
-    group.bench_function("limiters", |b| {
-        b.iter(|| pool.install(|| stepper.limiters(g, &mesh, &s.temperature)))
     });
     group.bench_function("face_heat", |b| {
         b.iter(|| pool.install(|| stepper.face_heat(&model, g, &mesh, &input, &s.temperature, 0.0)))
@@ -150,7 +152,10 @@ fn bench(c: &mut Criterion) {
         b.iter(|| pool.install(|| stepper.channel_heat(&model, g, &mesh, &input, &s.temperature)))
     });
     group.bench_function("advance", |b| {
-        b.iter(|| pool.install(|| stepper.advance(g, &mesh, &mut s.temperature, 1e-9)))
+        b.iter(|| {
+            pool.install(|| stepper.advance(g, &mesh, &mut s.temperature, 1e-9))
+                .is_none()
+        })
     });
     group.finish();
 

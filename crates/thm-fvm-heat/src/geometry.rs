@@ -5,9 +5,12 @@
 //!
 //! - **Topology** (cell kinds, faces, channels, and from the model which boundary sides
 //!   carry a prescribed flux and whether fluid–solid faces are case IV interfaces or
-//!   conduct like faces inside one medium, [`crate::InterfaceModel`]): the class of every face (same medium, fluid–solid interface, boundary slot), the
-//!   boundary-face table, the least-squares stencil sources, the cell → channel adjacency
-//!   (CSR) and the sphere owners. Built by [`HeatGeometry::new`] once per mesh (and again
+//!   conduct like faces inside one medium, [`crate::InterfaceModel`]): the class of every
+//!   face (same medium, fluid–solid interface, boundary slot), the lists of interface faces
+//!   and of faces whose temperature is a stencil value, per-cell flags (medium, has an
+//!   interface face, first cell of each of its faces), the boundary-face table, the
+//!   least-squares stencil sources, the cell → channel adjacency (CSR), the channel
+//!   partners the limiter bounds need beyond the stencil, and the sphere owners. Built by [`HeatGeometry::new`] once per mesh (and again
 //!   after every remesh).
 //! - **Positions** (vertex coordinates, hence centroids, areas, normals): the A-Eq. 47 factors
 //!   |A| / (ds n·e_s) and A − e_s |A| / (n·e_s) of every face, the distances of the harmonic
@@ -18,7 +21,8 @@
 //!   vertices have moved but the topology has not.
 //!
 //! What depends on the properties and the flow (conductivities, capacities, h_f of A-Eq. 45,
-//! the stability limit) is recomputed every outer step by [`crate::HeatStepper::prepare`].
+//! the stability limit) is recomputed every outer step by [`crate::HeatStepper::prepare`] and
+//! [`crate::HeatStepper::stability_limit`].
 
 use rayon::prelude::*;
 use thm_vpn_mesh::{CellKind, ChannelKind, FaceKind, NONE, PoreMesh};
@@ -46,7 +50,15 @@ pub(crate) fn first_where(n: usize, bad: impl Fn(usize) -> bool + Sync) -> Optio
         .reduce(|| None, |a, b| a.or(b))
 }
 
-/// Marks a stencil source as a face temperature (the low bits are the face index).
+/// Cell flag: a fluid cell.
+pub(crate) const CELL_FLUID: u8 = 1;
+/// Cell flag: a fluid cell with a case IV interface face.
+pub(crate) const CELL_INTERFACE: u8 = 2;
+/// Cell flag (shifted left by the face's position k): the cell is the face's first cell.
+pub(crate) const CELL_FIRST: u8 = 4;
+
+/// Marks a stencil source as a face temperature (the low bits are the index into
+/// [`HeatGeometry::value_faces`]).
 pub(crate) const FACE_VALUE: u32 = 1 << 31;
 
 #[inline]
@@ -79,6 +91,8 @@ pub(crate) enum FaceGeometry {
         solid_distance: f64,
         fluid_first: bool,
         owner: u32,
+        /// Position in [`HeatGeometry::interface_faces`].
+        index: u32,
     },
     /// Outer boundary: index into [`HeatGeometry::boundary`].
     Boundary { slot: u32 },
@@ -107,9 +121,16 @@ pub struct HeatGeometry {
     n_channels: usize,
     pub(crate) face: Vec<FaceGeometry>,
     pub(crate) boundary: Vec<BoundaryFace>,
+    // Faces of class `Interface`, in face order (their per-step law is stored in this order).
+    pub(crate) interface_faces: Vec<u32>,
+    // Faces whose temperature is a stencil value (interfaces and boundaries), in face order.
+    pub(crate) value_faces: Vec<u32>,
+    // Per cell: fluid (bit 0), fluid with a case IV interface face (bit 1, needs the h_f
+    // factors), and bit 2 + k set where the cell is the first cell of its face k.
+    pub(crate) cell_flags: Vec<u8>,
     // Per cell, per face k: where the neighbour value comes from (a cell index, or
-    // `FACE_VALUE | face` for a face temperature), its least-squares gradient weight, and the
-    // offset face centroid − cell centroid.
+    // `FACE_VALUE | v` for the temperature of `value_faces[v]`), its least-squares gradient
+    // weight, and the offset face centroid − cell centroid.
     pub(crate) stencil_source: Vec<[u32; 3]>,
     pub(crate) stencil_weight: Vec<[[f64; 2]; 3]>,
     pub(crate) stencil_offset: Vec<[[f64; 2]; 3]>,
@@ -122,6 +143,10 @@ pub struct HeatGeometry {
     pub(crate) cell_channel_start: Vec<u32>,
     pub(crate) cell_channel: Vec<(u32, bool)>,
     pub(crate) cell_channel_partner: Vec<u32>,
+    // Cell → channel partners that are not already one of the cell's stencil cells (CSR):
+    // the extra values of the limiter's neighbourhood bounds (the S2S partners).
+    pub(crate) extra_partner_start: Vec<u32>,
+    pub(crate) extra_partner: Vec<u32>,
     // Per channel: where the advected value is reconstructed (T2T: the shared face centroid).
     pub(crate) channel_point: Vec<[f64; 2]>,
 }
@@ -210,7 +235,12 @@ impl HeatGeometry {
         // Faces: class, and a slot per boundary face in face order.
         self.face.clear();
         self.boundary.clear();
-        for f in 0..nf {
+        self.interface_faces.clear();
+        self.value_faces.clear();
+        let continuous = model.interface == InterfaceModel::Continuous;
+        // Position of each face in `value_faces` (NONE for faces inside a medium).
+        let mut value_index = vec![NONE; nf];
+        for (f, vi) in value_index.iter_mut().enumerate() {
             let [c0, c1] = mesh.face_cells[f];
             if c1 == NONE {
                 let side = match mesh.face_kind[f] {
@@ -226,31 +256,35 @@ impl HeatGeometry {
                     area: 0.0,
                     tangent: [0.0; 2],
                 });
+                *vi = self.value_faces.len() as u32;
+                self.value_faces.push(f as u32);
                 continue;
             }
             let (k0, k1) = (mesh.cell_kind[c0 as usize], mesh.cell_kind[c1 as usize]);
-            let continuous = model.interface == InterfaceModel::Continuous;
-            self.face
-                .push(if continuous || k0.is_fluid() == k1.is_fluid() {
-                    FaceGeometry::Diffusive {
-                        conductance: 0.0,
-                        cross: [0.0; 2],
-                        d0: 0.0,
-                        d1: 0.0,
-                    }
-                } else {
-                    let solid = if k0.is_fluid() { k1 } else { k0 };
-                    let owner = match solid {
-                        CellKind::Solid { owner } => owner,
-                        CellKind::Fluid => 0,
-                    };
-                    FaceGeometry::Interface {
-                        area: 0.0,
-                        solid_distance: 0.0,
-                        fluid_first: k0.is_fluid(),
-                        owner,
-                    }
+            if continuous || k0.is_fluid() == k1.is_fluid() {
+                self.face.push(FaceGeometry::Diffusive {
+                    conductance: 0.0,
+                    cross: [0.0; 2],
+                    d0: 0.0,
+                    d1: 0.0,
                 });
+            } else {
+                let solid = if k0.is_fluid() { k1 } else { k0 };
+                let owner = match solid {
+                    CellKind::Solid { owner } => owner,
+                    CellKind::Fluid => 0,
+                };
+                self.face.push(FaceGeometry::Interface {
+                    area: 0.0,
+                    solid_distance: 0.0,
+                    fluid_first: k0.is_fluid(),
+                    owner,
+                    index: self.interface_faces.len() as u32,
+                });
+                self.interface_faces.push(f as u32);
+                *vi = self.value_faces.len() as u32;
+                self.value_faces.push(f as u32);
+            }
         }
         // Stencil sources: the neighbour cell in the same medium, else the face value.
         self.stencil_source.clear();
@@ -260,8 +294,28 @@ impl HeatGeometry {
                     let [c0, c1] = mesh.face_cells[f as usize];
                     if c0 == c as u32 { c1 } else { c0 }
                 }
-                _ => FACE_VALUE | f,
+                _ => FACE_VALUE | value_index[f as usize],
             })
+        }));
+        // Cell flags: medium, interface, and the side of each face.
+        self.cell_flags.clear();
+        self.cell_flags.extend((0..n).map(|c| {
+            let mut flags = 0u8;
+            if mesh.cell_kind[c].is_fluid() {
+                flags |= CELL_FLUID;
+                if mesh.cell_faces[c]
+                    .iter()
+                    .any(|&f| matches!(self.face[f as usize], FaceGeometry::Interface { .. }))
+                {
+                    flags |= CELL_INTERFACE;
+                }
+            }
+            for (k, &f) in mesh.cell_faces[c].iter().enumerate() {
+                if mesh.face_cells[f as usize][0] == c as u32 {
+                    flags |= CELL_FIRST << k;
+                }
+            }
+            flags
         }));
         self.stencil_weight.clear();
         self.stencil_weight.resize(n, [[0.0; 2]; 3]);
@@ -321,6 +375,23 @@ impl HeatGeometry {
                 self.cell_channel_partner[*slot as usize] = cells[1 - side];
                 *slot += 1;
             }
+        }
+        // Limiter bounds: channel partners that are not already a stencil cell.
+        self.extra_partner_start.clear();
+        self.extra_partner.clear();
+        self.extra_partner_start.push(0);
+        for c in 0..n {
+            let (lo, hi) = (
+                self.cell_channel_start[c] as usize,
+                self.cell_channel_start[c + 1] as usize,
+            );
+            for &other in &self.cell_channel_partner[lo..hi] {
+                if !self.stencil_source[c].contains(&other) {
+                    self.extra_partner.push(other);
+                }
+            }
+            self.extra_partner_start
+                .push(self.extra_partner.len() as u32);
         }
         self.channel_point.clear();
         self.channel_point.resize(nch, [0.0; 2]);

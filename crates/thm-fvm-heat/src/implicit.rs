@@ -13,9 +13,9 @@ use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
 use thm_vpn_mesh::{NONE, PoreMesh};
 
-use crate::geometry::BoundaryFace;
+use crate::geometry::{BoundaryFace, FaceGeometry};
 use crate::params::{HeatModel, SideCondition};
-use crate::stepper::{FaceLaw, boundary_conductance};
+use crate::stepper::{boundary_conductance, face_conductivity};
 use crate::{FlowInput, HeatError, HeatGeometry, HeatState, HeatStepper};
 
 #[inline]
@@ -58,7 +58,7 @@ impl HeatStepper {
         let t_old = state.time;
         let t_new = t_old + dt;
         // Gradients at T^n for the deferred corrections.
-        self.face_temperatures(model, geometry, mesh, &state.temperature, t_old);
+        self.face_values(model, geometry, mesh, &state.temperature, t_old);
         self.gradients(model, geometry, mesh, &state.temperature);
 
         let n = mesh.n_cells();
@@ -82,17 +82,30 @@ impl HeatStepper {
         for f in 0..mesh.n_faces() {
             let [c0, c1] = mesh.face_cells[f];
             let c0 = c0 as usize;
-            match self.face_law[f] {
-                FaceLaw::Diffusive { g, cross } => {
+            match geometry.face[f] {
+                FaceGeometry::Diffusive {
+                    conductance,
+                    cross,
+                    d0,
+                    d1,
+                } => {
                     let c1 = c1 as usize;
-                    couple(c0, c1, g, &mut diag);
+                    let lf =
+                        face_conductivity(self.conductivity[c0], self.conductivity[c1], d0, d1);
+                    couple(c0, c1, lf * conductance, &mut diag);
+                    let cross = [lf * cross[0], lf * cross[1]];
                     let (g0, g1) = (self.gradient[c0], self.gradient[c1]);
                     let s = dot(cross, [0.5 * (g0[0] + g1[0]), 0.5 * (g0[1] + g1[1])]);
                     rhs[c0] += s;
                     rhs[c1] -= s;
                 }
-                FaceLaw::Interface { g, .. } => couple(c0, c1 as usize, g, &mut diag),
-                FaceLaw::Boundary { slot } => {
+                FaceGeometry::Interface { index, .. } => couple(
+                    c0,
+                    c1 as usize,
+                    self.interface_law[index as usize].g,
+                    &mut diag,
+                ),
+                FaceGeometry::Boundary { slot } => {
                     let BoundaryFace {
                         side,
                         normal_distance,
@@ -116,7 +129,7 @@ impl HeatStepper {
                     }
                 }
             }
-            debug_assert!(c1 != NONE || matches!(self.face_law[f], FaceLaw::Boundary { .. }));
+            debug_assert!(c1 != NONE || matches!(geometry.face[f], FaceGeometry::Boundary { .. }));
         }
         for k in 0..mesh.channels.len() {
             let [a, b] = mesh.channels.cells[k].map(|c| c as usize);

@@ -49,9 +49,9 @@
 //!   parallel pass by [`HeatGeometry::update_positions`] after the vertices move. The stepper
 //!   recomputes only what depends on the properties and the flow each outer step.
 //!
-//! A step is the fixed sequence `prepare` → (`face_temperatures` → `gradients` → `limiters` →
-//! `face_heat` → `channel_heat` → `advance`) per sub-step; each stage is a public method
-//! testable alone. Face and channel heat rates are computed once per face/channel and gathered
+//! A step is the fixed sequence `prepare` → `stability_limit` → (`face_values` → `gradients`
+//! (gradient and limiter) → `face_heat` → `channel_heat` → `advance`) per sub-step; each stage
+//! is a public method testable alone. Face and channel heat rates are computed once per face/channel and gathered
 //! per cell in a fixed order, so energy is conserved to round-off and 1-thread and N-thread
 //! runs give identical bits.
 //!

@@ -101,6 +101,23 @@ impl DiameterPowers {
     }
 }
 
+/// ∛p: for positive normal `p`, Newton's method on y³ = p from a first guess read off the
+/// bits (exponent divided by three, relative error below 4 %; four steps bring it to
+/// round-off), a few multiplications and divisions instead of the library routine;
+/// `f64::cbrt` for zero, subnormal, infinite or NaN `p`.
+#[inline]
+pub(crate) fn cube_root(p: f64) -> f64 {
+    if !(p.is_normal() && p > 0.0) {
+        return p.cbrt();
+    }
+    let mut y = f64::from_bits(p.to_bits() / 3 + 0x2A9F_7893_782D_A1CE);
+    for _ in 0..4 {
+        let y2 = y * y;
+        y -= (y2 * y - p) / (3.0 * y2);
+    }
+    y
+}
+
 /// The fluid cell's part of A-Eqs. 43–45: with x = ρ_eff v / μ_eff (Re per unit diameter),
 /// Re^p Pr^{1/3} = (x^p Pr^{1/3}) d^p, so the coefficient of every interface face of the cell
 /// is a few products with the sphere's [`DiameterPowers`].
@@ -128,9 +145,8 @@ impl ExchangeFactors {
                 ..Self::default()
             };
         }
-        let pr3 = (mix.specific_heat * mix.dynamic_viscosity / mix.conductivity)
-            .max(0.0)
-            .cbrt();
+        let pr3 =
+            cube_root((mix.specific_heat * mix.dynamic_viscosity / mix.conductivity).max(0.0));
         // x^0.6 = (x^0.2)^3 and x^0.7 = x^0.2 x^0.5: one exp, one ln, one sqrt.
         let x02 = (0.2 * x.ln()).exp();
         Self {
@@ -183,6 +199,29 @@ impl HeatModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The Newton cube root agrees with the library's to a few units in the last place over
+    /// the whole normal range.
+    #[test]
+    fn cube_root_matches_the_library() {
+        let mut worst = 0.0f64;
+        let mut p = f64::MIN_POSITIVE;
+        while p < 1e300 {
+            for q in [p, p * 1.37, p * 2.9, p * 5.1] {
+                let (a, b) = (cube_root(q), q.cbrt());
+                worst = worst.max(((a - b) / b).abs());
+            }
+            p *= 7.3;
+        }
+        assert!(
+            worst <= 4.0 * f64::EPSILON,
+            "worst relative difference {worst:e}"
+        );
+        for q in [0.0, f64::INFINITY, 1e-310] {
+            assert_eq!(cube_root(q), q.cbrt());
+        }
+        assert!(cube_root(f64::NAN).is_nan());
+    }
 
     /// The factored form used by the stepper equals A-Eqs. 43–45 evaluated directly, in both
     /// Reynolds ranges and at rest.

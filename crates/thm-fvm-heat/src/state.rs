@@ -64,6 +64,19 @@ impl FlowInput {
 
     /// Checks lengths against `mesh` and ranges of the fluid-cell entries.
     pub fn validate(&self, mesh: &PoreMesh) -> Result<(), HeatError> {
+        self.check_lengths(mesh)?;
+        // One parallel pass per array family finds the first bad entry; the error is then
+        // built serially for that entry (same error as a serial scan).
+        if let Some(c) = first_where(mesh.n_cells(), |c| {
+            mesh.cell_kind[c].is_fluid() && !self.fluid_entry_ok(c)
+        }) {
+            return Err(self.fluid_entry_error(c));
+        }
+        self.check_fluxes(mesh)
+    }
+
+    /// The length checks of [`Self::validate`].
+    pub(crate) fn check_lengths(&self, mesh: &PoreMesh) -> Result<(), HeatError> {
         let n = mesh.n_cells();
         for (what, len, expected) in [
             ("liquid_fraction", self.liquid_fraction.len(), n),
@@ -88,55 +101,53 @@ impl FlowInput {
                 });
             }
         }
-        // One parallel pass per array family finds the first bad entry; the error is then
-        // built serially for that entry (same error as a serial scan).
-        let fluid_ok = |c: usize| {
-            if !mesh.cell_kind[c].is_fluid() {
-                return true;
-            }
-            let (a, rq, rp) = (
-                self.liquid_fraction[c],
-                self.liquid_density[c],
-                self.gas_density[c],
-            );
-            a.is_finite()
-                && (0.0..=1.0).contains(&a)
-                && rq.is_finite()
-                && rq >= 0.0
-                && rp.is_finite()
-                && rp >= 0.0
-                && a * rq + (1.0 - a) * rp > 0.0
-        };
-        if let Some(c) = first_where(n, |c| !fluid_ok(c)) {
-            let a = self.liquid_fraction[c];
-            if !(a.is_finite() && (0.0..=1.0).contains(&a)) {
-                return Err(HeatError::InputOutOfRange {
-                    quantity: "liquid_fraction",
-                    index: c,
-                    range: "in [0, 1]",
-                    value: a,
-                });
-            }
-            for (quantity, v) in [
-                ("liquid_density", self.liquid_density[c]),
-                ("gas_density", self.gas_density[c]),
-            ] {
-                if !(v.is_finite() && v >= 0.0) {
-                    return Err(HeatError::InputOutOfRange {
-                        quantity,
-                        index: c,
-                        range: ">= 0 kg/m³",
-                        value: v,
-                    });
-                }
-            }
-            return Err(HeatError::InputOutOfRange {
-                quantity: "effective fluid density",
+        Ok(())
+    }
+
+    /// Whether the entries of fluid cell `c` are in range (lengths checked).
+    #[inline]
+    pub(crate) fn fluid_entry_ok(&self, c: usize) -> bool {
+        fluid_entry_ok(
+            self.liquid_fraction[c],
+            self.liquid_density[c],
+            self.gas_density[c],
+        )
+    }
+
+    /// The error for a fluid cell whose entries are not in range.
+    pub(crate) fn fluid_entry_error(&self, c: usize) -> HeatError {
+        let a = self.liquid_fraction[c];
+        if !(a.is_finite() && (0.0..=1.0).contains(&a)) {
+            return HeatError::InputOutOfRange {
+                quantity: "liquid_fraction",
                 index: c,
-                range: "> 0 kg/m³",
-                value: a * self.liquid_density[c] + (1.0 - a) * self.gas_density[c],
-            });
+                range: "in [0, 1]",
+                value: a,
+            };
         }
+        for (quantity, v) in [
+            ("liquid_density", self.liquid_density[c]),
+            ("gas_density", self.gas_density[c]),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return HeatError::InputOutOfRange {
+                    quantity,
+                    index: c,
+                    range: ">= 0 kg/m³",
+                    value: v,
+                };
+            }
+        }
+        HeatError::InputOutOfRange {
+            quantity: "effective fluid density",
+            index: c,
+            range: "> 0 kg/m³",
+            value: a * self.liquid_density[c] + (1.0 - a) * self.gas_density[c],
+        }
+    }
+
+    /// The mass-flux checks of [`Self::validate`] (lengths checked).
+    pub(crate) fn check_fluxes(&self, mesh: &PoreMesh) -> Result<(), HeatError> {
         let flux = &self.channel_mass_flux;
         if let Some(k) = first_where(flux.len(), |k| !flux[k].is_finite()) {
             return Err(HeatError::InputOutOfRange {
@@ -165,4 +176,17 @@ impl FlowInput {
         }
         Ok(())
     }
+}
+
+/// Whether a fluid cell's liquid fraction `a` and phase densities `rq`, `rp` are in range:
+/// a ∈ [0, 1], ρ ∈ [0, ∞), and a positive mixture density.
+#[inline]
+pub(crate) fn fluid_entry_ok(a: f64, rq: f64, rp: f64) -> bool {
+    // Comparisons with NaN are false: a ∈ [0, 1] and ρ ∈ [0, ∞) exclude NaN and ∞. The
+    // terms are joined with `&` (no short circuit), as this runs for every fluid cell every
+    // step.
+    (0.0..=1.0).contains(&a)
+        & (0.0..f64::INFINITY).contains(&rq)
+        & (0.0..f64::INFINITY).contains(&rp)
+        & (a * rq + (1.0 - a) * rp > 0.0)
 }

@@ -1,19 +1,26 @@
 //! The explicit finite-volume step (A-Eqs. 37–51) with its stability limit and sub-cycling.
 //!
-//! One outer step is the fixed sequence [`HeatStepper::prepare`] (input checks, cell
-//! properties, face and channel conductances from the cached [`HeatGeometry`]) and then, for
-//! each sub-step: [`HeatStepper::face_temperatures`] → [`HeatStepper::gradients`] →
-//! [`HeatStepper::limiters`] → [`HeatStepper::face_heat`] → [`HeatStepper::channel_heat`] →
-//! [`HeatStepper::advance`]. Every stage is a parallel map over cells, faces or channels
-//! whose results are gathered per cell in a fixed order, so 1-thread and N-thread runs give
-//! identical bits.
+//! One outer step is the fixed sequence [`HeatStepper::prepare`] (input checks fused with the
+//! cell properties in one pass over the cells, the interface laws, the S2S conductances) and
+//! [`HeatStepper::stability_limit`], then, for each sub-step: [`HeatStepper::face_values`]
+//! (interface and boundary faces only) → [`HeatStepper::gradients`] (gradient and limiter in
+//! one pass over the cells) → [`HeatStepper::face_heat`] → [`HeatStepper::channel_heat`] →
+//! [`HeatStepper::advance`] (with the finiteness check). Conductances of faces inside a
+//! medium are not stored: λ_f is formed from the two cell conductivities where a face is
+//! used, from the geometry cached in [`HeatGeometry`]. Every stage is a parallel map over
+//! cells, faces or channels whose results are gathered per cell in a fixed order, so
+//! 1-thread and N-thread runs give identical bits.
 
 use rayon::prelude::*;
 use thm_vpn_mesh::{ChannelKind, PoreMesh};
 
-use crate::geometry::{BoundaryFace, FACE_VALUE, FaceGeometry, GRAIN, dot, first_where, sub};
+use crate::geometry::{
+    BoundaryFace, CELL_FIRST, CELL_FLUID, CELL_INTERFACE, FACE_VALUE, FaceGeometry, GRAIN, dot,
+    first_where, sub,
+};
 use crate::params::{GradientScheme, HeatModel, SideCondition};
 use crate::properties::ExchangeFactors;
+use crate::state::fluid_entry_ok;
 use crate::{FlowInput, HeatError, HeatGeometry, HeatState};
 
 pub use crate::geometry::MIN_FACE_COSINE;
@@ -24,19 +31,27 @@ pub use crate::geometry::MIN_FACE_COSINE;
 /// update then stays within the neighbourhood bounds for (1 + 2) Δt Σ_out ṁ c_p ≤ C.
 pub const ADVECTIVE_FACTOR: f64 = 3.0;
 
-/// How heat crosses one face; coefficients computed once per outer step.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum FaceLaw {
-    /// Two cells of the same medium (fluid–fluid or solid–solid): A-Eq. 47 with the primary
-    /// conductance `g` = λ_f |A| / (ds n·e_s) [W/K] and `cross` = λ_f (A − e_s |A|/(n·e_s))
-    /// [W m/K], dotted with the mean of the two cell gradients.
-    Diffusive { g: f64, cross: [f64; 2] },
-    /// Fluid–solid interface (case IV): series conductance `g` = |A| h_f k_s / (h_f + k_s),
-    /// k_s = λ_s / d_{r,c}; face temperature weight `w0` of cell 0.
-    Interface { g: f64, w0: f64 },
-    /// Outer boundary (cases I–III): index into the geometry's boundary table; the
-    /// conductivity is the cell's.
-    Boundary { slot: u32 },
+/// How heat crosses one fluid–solid interface face (case IV); computed once per outer step.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct InterfaceLaw {
+    /// Series conductance |A| h_f k_s / (h_f + k_s) [W/K], k_s = λ_s / d_{r,c}.
+    pub g: f64,
+    /// Weight of cell 0 in the interface temperature.
+    pub w0: f64,
+}
+
+/// λ_f of A-Eq. 47 between cells of conductivity `l0` and `l1`: the harmonic mean weighted
+/// by the distances `d0`, `d1` of the centroids to the face (the arithmetic mean where the
+/// weighted sum vanishes). The face's primary conductance is λ_f times the geometry's
+/// `conductance`, its cross term λ_f times `cross`.
+#[inline]
+pub(crate) fn face_conductivity(l0: f64, l1: f64, d0: f64, d1: f64) -> f64 {
+    let den = d1 * l0 + d0 * l1;
+    if den > 0.0 {
+        l0 * l1 * (d0 + d1) / den
+    } else {
+        0.5 * (l0 + l1)
+    }
 }
 
 /// What one outer step did.
@@ -61,9 +76,11 @@ pub struct HeatStepper {
     exchange: Vec<ExchangeFactors>,
     pub(crate) gradient: Vec<[f64; 2]>,
     limiter: Vec<f64>,
+    // Per interface face, in the geometry's `interface_faces` order.
+    pub(crate) interface_law: Vec<InterfaceLaw>,
+    // Per value face (interfaces and boundaries), in the geometry's `value_faces` order.
+    face_value: Vec<f64>,
     // Per face.
-    pub(crate) face_law: Vec<FaceLaw>,
-    face_temperature: Vec<f64>,
     face_heat: Vec<f64>,
     // Per channel.
     pub(crate) channel_conductance: Vec<f64>,
@@ -152,14 +169,11 @@ impl HeatStepper {
         t: f64,
         h: f64,
     ) -> Result<(), HeatError> {
-        self.face_temperatures(model, geometry, mesh, &state.temperature, t);
+        self.face_values(model, geometry, mesh, &state.temperature, t);
         self.gradients(model, geometry, mesh, &state.temperature);
-        self.limiters(geometry, mesh, &state.temperature);
         self.face_heat(model, geometry, mesh, input, &state.temperature, t);
         self.channel_heat(model, geometry, mesh, input, &state.temperature);
-        self.advance(geometry, mesh, &mut state.temperature, h);
-        let temp = &state.temperature;
-        if let Some(c) = first_where(temp.len(), |c| !temp[c].is_finite()) {
+        if let Some(c) = self.advance(geometry, mesh, &mut state.temperature, h) {
             return Err(HeatError::NonFinite {
                 quantity: "temperature",
                 cell: c,
@@ -172,9 +186,11 @@ impl HeatStepper {
     }
 
     /// Stage 0: checks the geometry against the mesh, the state and the input, then computes
-    /// the per-cell capacities and conductivities (A-Eqs. 32–36 in fluid cells), every face's
-    /// law (A-Eq. 47 conductances, h_f of A-Eqs. 43–45 at interfaces) and the S2S channel
-    /// conductances (A-Eq. 40). Three parallel passes, no allocation after the first call.
+    /// the per-cell capacities and conductivities (A-Eqs. 32–36 in fluid cells) in the same
+    /// pass over the cells as the range checks of the temperatures and the fluid entries, the
+    /// laws of the fluid–solid interface faces (h_f of A-Eqs. 43–45) and the S2S channel
+    /// conductances (A-Eq. 40). No allocation after the first call. Errors are those of the
+    /// separate checks in their order: temperature, then [`FlowInput::validate`].
     pub fn prepare(
         &mut self,
         model: &HeatModel,
@@ -193,38 +209,51 @@ impl HeatStepper {
             });
         }
         let temp = &state.temperature;
-        if let Some(c) = first_where(n, |c| !(temp[c].is_finite() && temp[c] > 0.0)) {
-            return Err(HeatError::InputOutOfRange {
-                quantity: "temperature",
-                index: c,
-                range: "finite and > 0 K",
-                value: state.temperature[c],
-            });
+        let temperature_error = |c: usize| HeatError::InputOutOfRange {
+            quantity: "temperature",
+            index: c,
+            range: "finite and > 0 K",
+            value: temp[c],
+        };
+        if let Err(e) = input.check_lengths(mesh) {
+            if let Some(c) = first_where(n, |c| !temperature_ok(temp[c])) {
+                return Err(temperature_error(c));
+            }
+            return Err(e);
         }
-        input.validate(mesh)?;
-        self.prepare_cells(model, geometry, mesh, input);
-        self.prepare_faces(model, geometry, mesh);
+        let (bad_temperature, bad_fluid) = self.prepare_cells(model, geometry, mesh, input, temp);
+        if let Some(c) = bad_temperature {
+            return Err(temperature_error(c));
+        }
+        if let Some(c) = bad_fluid {
+            return Err(input.fluid_entry_error(c));
+        }
+        input.check_fluxes(mesh)?;
+        self.prepare_interfaces(model, geometry, mesh);
         self.prepare_channels(mesh);
         let nf = mesh.n_faces();
         self.gradient.resize(n, [0.0; 2]);
         self.limiter.resize(n, 1.0);
-        self.face_temperature.resize(nf, 0.0);
+        self.face_value.resize(geometry.value_faces.len(), 0.0);
         self.face_heat.resize(nf, 0.0);
         self.channel_heat.resize(mesh.channels.len(), 0.0);
         Ok(())
     }
 
-    /// Part of [`Self::prepare`]: capacity C = V (ρc), conductivity and specific heat of every
-    /// cell (mixture A-Eqs. 32–36 in fluid cells), and each fluid cell's share of the
-    /// interface coefficient (A-Eqs. 43–45) from its mixture and its fastest channel speed
-    /// |ṁ| / (ρ_eff h b).
+    /// Part of [`Self::prepare`] (sizes of `input` and `temp` checked against the mesh):
+    /// capacity C = V (ρc), conductivity and specific heat of every cell (mixture A-Eqs. 32–36
+    /// in fluid cells), and, for fluid cells with an interface face, their share of the
+    /// interface coefficient (A-Eqs. 43–45) from the mixture and the fastest channel speed
+    /// |ṁ| / (ρ_eff h b). Returns the first cell whose temperature is not finite and > 0 K,
+    /// and the first fluid cell whose entries of `input` are out of range.
     pub fn prepare_cells(
         &mut self,
         model: &HeatModel,
         geometry: &HeatGeometry,
         mesh: &PoreMesh,
         input: &FlowInput,
-    ) {
+        temp: &[f64],
+    ) -> (Option<usize>, Option<usize>) {
         let n = mesh.n_cells();
         self.capacity.resize(n, 0.0);
         self.conductivity.resize(n, 0.0);
@@ -234,106 +263,112 @@ impl HeatStepper {
         let solid = model.solid;
         let start = &geometry.cell_channel_start;
         let cell_channel = &geometry.cell_channel;
+        let flags = &geometry.cell_flags;
         let ch = &mesh.channels;
         (
-            &mut self.capacity,
-            &mut self.conductivity,
-            &mut self.specific_heat,
-            &mut self.exchange,
+            self.capacity.par_chunks_mut(GRAIN),
+            self.conductivity.par_chunks_mut(GRAIN),
+            self.specific_heat.par_chunks_mut(GRAIN),
+            self.exchange.par_chunks_mut(GRAIN),
         )
             .into_par_iter()
-            .with_min_len(GRAIN)
             .enumerate()
-            .for_each(|(c, (cap, lam, cp, exchange))| {
-                let volume = mesh.cell_area[c] * b;
-                if mesh.cell_kind[c].is_fluid() {
-                    let mix = model.fluid_mixture(
-                        input.liquid_fraction[c],
-                        input.liquid_density[c],
-                        input.gas_density[c],
-                    );
-                    *cap = volume * mix.volumetric_heat_capacity;
-                    *lam = mix.conductivity;
-                    *cp = mix.specific_heat;
-                    let mut speed = 0.0f64;
-                    for &(k, _) in &cell_channel[start[c] as usize..start[c + 1] as usize] {
-                        let k = k as usize;
-                        let a = ch.aperture[k] * b;
-                        if a > 0.0 && mix.density > 0.0 {
-                            speed = speed.max(input.channel_mass_flux[k].abs() / (mix.density * a));
-                        }
+            .map(|(chunk, (cap, lam, cp, exchange))| {
+                // Chunk-local views of the same length as the outputs.
+                let (lo, len) = (chunk * GRAIN, cap.len());
+                let temp = &temp[lo..lo + len];
+                let area = &mesh.cell_area[lo..lo + len];
+                let flags = &flags[lo..lo + len];
+                let alpha = &input.liquid_fraction[lo..lo + len];
+                let rho_q = &input.liquid_density[lo..lo + len];
+                let rho_p = &input.gas_density[lo..lo + len];
+                let (mut bad_temperature, mut bad_fluid) = (None, None);
+                for i in 0..len {
+                    if bad_temperature.is_none() && !temperature_ok(temp[i]) {
+                        bad_temperature = Some(lo + i);
                     }
-                    *exchange = ExchangeFactors::new(&mix, speed);
-                } else {
-                    *cap = volume * solid.volumetric_heat_capacity();
-                    *lam = solid.conductivity;
-                    *cp = solid.specific_heat;
+                    let volume = area[i] * b;
+                    let flag = flags[i];
+                    if flag & CELL_FLUID == 0 {
+                        cap[i] = volume * solid.volumetric_heat_capacity();
+                        lam[i] = solid.conductivity;
+                        cp[i] = solid.specific_heat;
+                        continue;
+                    }
+                    let (a, rq, rp) = (alpha[i], rho_q[i], rho_p[i]);
+                    if bad_fluid.is_none() && !fluid_entry_ok(a, rq, rp) {
+                        bad_fluid = Some(lo + i);
+                    }
+                    let mix = model.fluid_mixture(a, rq, rp);
+                    cap[i] = volume * mix.volumetric_heat_capacity;
+                    lam[i] = mix.conductivity;
+                    cp[i] = mix.specific_heat;
+                    if flag & CELL_INTERFACE != 0 {
+                        let c = lo + i;
+                        let mut speed = 0.0f64;
+                        for &(k, _) in &cell_channel[start[c] as usize..start[c + 1] as usize] {
+                            let k = k as usize;
+                            let a = ch.aperture[k] * b;
+                            if a > 0.0 && mix.density > 0.0 {
+                                speed =
+                                    speed.max(input.channel_mass_flux[k].abs() / (mix.density * a));
+                            }
+                        }
+                        exchange[i] = ExchangeFactors::new(&mix, speed);
+                    }
                 }
-            });
+                (bad_temperature, bad_fluid)
+            })
+            .reduce(|| (None, None), |a, b| (a.0.or(b.0), a.1.or(b.1)))
     }
 
-    /// Part of [`Self::prepare`]: every face's law from its geometry and the cell
-    /// conductivities of [`Self::prepare_cells`]. Inside a medium λ_f is the harmonic mean
-    /// weighted by the distances along e_s; at a fluid–solid interface h_f (A-Eq. 45) uses
-    /// the fluid cell's mixture and its fastest channel speed |ṁ| / (ρ_eff h b).
-    pub fn prepare_faces(&mut self, model: &HeatModel, geometry: &HeatGeometry, mesh: &PoreMesh) {
-        let nf = mesh.n_faces();
-        self.face_law.resize(nf, FaceLaw::Boundary { slot: 0 });
-        let lam = &self.conductivity;
+    /// Part of [`Self::prepare`]: the law of every fluid–solid interface face (case IV) from
+    /// the cell properties of [`Self::prepare_cells`]: h_f (A-Eq. 45) from the fluid cell's
+    /// mixture and fastest channel speed, in series with the solid's half cell λ_s / d_{r,c}.
+    pub fn prepare_interfaces(
+        &mut self,
+        model: &HeatModel,
+        geometry: &HeatGeometry,
+        mesh: &PoreMesh,
+    ) {
+        let faces = &geometry.interface_faces;
+        self.interface_law
+            .resize(faces.len(), InterfaceLaw::default());
         let exchange = &self.exchange;
         let diameter = &geometry.sphere_diameter_powers;
         let porosity = geometry.porosity;
         let solid_lambda = model.solid.conductivity;
-        (&mut self.face_law, &geometry.face)
-            .into_par_iter()
+        self.interface_law
+            .par_iter_mut()
             .with_min_len(GRAIN)
-            .enumerate()
-            .for_each(|(f, (law, geo))| {
-                *law = match *geo {
-                    FaceGeometry::Diffusive {
-                        conductance,
-                        cross,
-                        d0,
-                        d1,
-                    } => {
-                        let [c0, c1] = mesh.face_cells[f];
-                        let (l0, l1) = (lam[c0 as usize], lam[c1 as usize]);
-                        let den = d1 * l0 + d0 * l1;
-                        let lf = if den > 0.0 {
-                            l0 * l1 * (d0 + d1) / den
-                        } else {
-                            0.5 * (l0 + l1)
-                        };
-                        FaceLaw::Diffusive {
-                            g: lf * conductance,
-                            cross: [lf * cross[0], lf * cross[1]],
-                        }
-                    }
-                    FaceGeometry::Interface {
-                        area,
-                        solid_distance,
-                        fluid_first,
-                        owner,
-                    } => {
-                        let [c0, c1] = mesh.face_cells[f];
-                        let cf = if fluid_first { c0 } else { c1 } as usize;
-                        let dp = diameter.get(owner as usize).copied().unwrap_or_default();
-                        let h = exchange[cf].coefficient(porosity, &dp);
-                        let ks = if solid_distance > 0.0 {
-                            solid_lambda / solid_distance
-                        } else {
-                            0.0
-                        };
-                        let (g, wf) = if h + ks > 0.0 {
-                            (area * h * ks / (h + ks), h / (h + ks))
-                        } else {
-                            (0.0, 0.5)
-                        };
-                        let w0 = if fluid_first { wf } else { 1.0 - wf };
-                        FaceLaw::Interface { g, w0 }
-                    }
-                    FaceGeometry::Boundary { slot } => FaceLaw::Boundary { slot },
+            .zip(faces.par_iter())
+            .for_each(|(law, &f)| {
+                let FaceGeometry::Interface {
+                    area,
+                    solid_distance,
+                    fluid_first,
+                    owner,
+                    ..
+                } = geometry.face[f as usize]
+                else {
+                    return;
                 };
+                let [c0, c1] = mesh.face_cells[f as usize];
+                let cf = if fluid_first { c0 } else { c1 } as usize;
+                let dp = diameter.get(owner as usize).copied().unwrap_or_default();
+                let h = exchange[cf].coefficient(porosity, &dp);
+                let ks = if solid_distance > 0.0 {
+                    solid_lambda / solid_distance
+                } else {
+                    0.0
+                };
+                let (g, wf) = if h + ks > 0.0 {
+                    (area * h * ks / (h + ks), h / (h + ks))
+                } else {
+                    (0.0, 0.5)
+                };
+                let w0 = if fluid_first { wf } else { 1.0 - wf };
+                *law = InterfaceLaw { g, w0 };
             });
     }
 
@@ -366,8 +401,10 @@ impl HeatStepper {
             });
     }
 
-    /// Per-cell sum of conductances and of the advective outflow, and the resulting limit.
-    fn stability_limit(
+    /// The explicit stability limit [s] with the coefficients of the last [`Self::prepare`]
+    /// (without the safety factor): min over cells of C_i / (Σ conductances + 3 Σ outflow
+    /// ṁ c_p), the conductances of faces inside a medium formed from the cell conductivities.
+    pub fn stability_limit(
         &self,
         model: &HeatModel,
         geometry: &HeatGeometry,
@@ -375,56 +412,93 @@ impl HeatStepper {
         input: &FlowInput,
     ) -> f64 {
         let start = &geometry.cell_channel_start;
-        (0..mesh.n_cells())
+        let lam = &self.conductivity;
+        let n = mesh.n_cells();
+        (0..n.div_ceil(GRAIN))
             .into_par_iter()
-            .with_min_len(GRAIN)
-            .map(|c| {
-                let mut s = 0.0;
-                for &f in &mesh.cell_faces[c] {
-                    let f = f as usize;
-                    s += match self.face_law[f] {
-                        FaceLaw::Diffusive { g, .. } | FaceLaw::Interface { g, .. } => g,
-                        FaceLaw::Boundary { slot } => {
-                            let bf = &geometry.boundary[slot as usize];
-                            let m = input.boundary_mass_flux[f];
-                            let adv = if m > 0.0 {
-                                2.0 * m * self.specific_heat[c]
-                            } else {
-                                0.0
-                            };
-                            adv + boundary_conductance(
-                                &model.sides[bf.side as usize],
-                                self.conductivity[c],
-                                bf.normal_distance,
-                                bf.area,
-                            )
-                        }
-                    };
-                }
-                for &(k, second) in &geometry.cell_channel[start[c] as usize..start[c + 1] as usize]
+            .map(|chunk| {
+                let (lo, hi) = (chunk * GRAIN, ((chunk + 1) * GRAIN).min(n));
+                let mut best: Option<f64> = None;
+                for (i, (((((faces, &flag), source), &cap), &cp), &lc)) in mesh.cell_faces[lo..hi]
+                    .iter()
+                    .zip(&geometry.cell_flags[lo..hi])
+                    .zip(&geometry.stencil_source[lo..hi])
+                    .zip(&self.capacity[lo..hi])
+                    .zip(&self.specific_heat[lo..hi])
+                    .zip(&lam[lo..hi])
+                    .enumerate()
                 {
-                    let k = k as usize;
-                    s += self.channel_conductance[k];
-                    let m = input.channel_mass_flux[k];
-                    let out = if second { -m } else { m };
-                    if out > 0.0 {
-                        s += ADVECTIVE_FACTOR * out * self.specific_heat[c];
+                    let c = lo + i;
+                    let mut s = 0.0;
+                    for (j, &f) in faces.iter().enumerate() {
+                        let f = f as usize;
+                        s += match geometry.face[f] {
+                            FaceGeometry::Diffusive {
+                                conductance,
+                                d0,
+                                d1,
+                                ..
+                            } => {
+                                let other = lam[source[j] as usize];
+                                let lf = if flag & (CELL_FIRST << j) != 0 {
+                                    face_conductivity(lc, other, d0, d1)
+                                } else {
+                                    face_conductivity(other, lc, d0, d1)
+                                };
+                                lf * conductance
+                            }
+                            FaceGeometry::Interface { index, .. } => {
+                                self.interface_law[index as usize].g
+                            }
+                            FaceGeometry::Boundary { slot } => {
+                                let bf = &geometry.boundary[slot as usize];
+                                let m = input.boundary_mass_flux[f];
+                                let adv = if m > 0.0 { 2.0 * m * cp } else { 0.0 };
+                                adv + boundary_conductance(
+                                    &model.sides[bf.side as usize],
+                                    lc,
+                                    bf.normal_distance,
+                                    bf.area,
+                                )
+                            }
+                        };
                     }
+                    for &(k, second) in
+                        &geometry.cell_channel[start[c] as usize..start[c + 1] as usize]
+                    {
+                        let k = k as usize;
+                        s += self.channel_conductance[k];
+                        let m = input.channel_mass_flux[k];
+                        let out = if second { -m } else { m };
+                        if out > 0.0 {
+                            s += ADVECTIVE_FACTOR * out * cp;
+                        }
+                    }
+                    let limit = if s > 0.0 { cap / s } else { f64::INFINITY };
+                    best = Some(match best {
+                        Some(b) if b.total_cmp(&limit).is_le() => b,
+                        _ => limit,
+                    });
                 }
-                if s > 0.0 {
-                    self.capacity[c] / s
-                } else {
-                    f64::INFINITY
-                }
+                best
             })
-            .min_by(|a, b| a.total_cmp(b))
+            .reduce(
+                || None,
+                |a, b| match (a, b) {
+                    (Some(x), Some(y)) => Some(if x.total_cmp(&y).is_le() { x } else { y }),
+                    (x, None) => x,
+                    (None, y) => y,
+                },
+            )
             .unwrap_or(f64::INFINITY)
     }
 
-    /// Stage 1: face temperatures T̄_f for the Green–Gauss gradients: the arithmetic mean
-    /// A-Eq. 42 inside a medium, the interface temperature of case IV, and the boundary values
-    /// of cases I–III at time `t`.
-    pub fn face_temperatures(
+    /// Stage 1: the temperatures of the faces whose value enters the gradients and limiters
+    /// in place of a neighbour cell: the interface temperature of case IV and the boundary
+    /// values of cases I–III at time `t`. (Faces inside a medium use the neighbour cell in the
+    /// least-squares stencil and the arithmetic mean A-Eq. 42 in Green–Gauss, formed where
+    /// they are used.)
+    pub fn face_values(
         &mut self,
         model: &HeatModel,
         geometry: &HeatGeometry,
@@ -433,23 +507,27 @@ impl HeatStepper {
         t: f64,
     ) {
         let lam = &self.conductivity;
+        let law = &self.interface_law;
         let boundary = &geometry.boundary;
         let sides: [f64; 5] = std::array::from_fn(|k| match &model.sides[k] {
             SideCondition::Temperature(s) => s.at(t),
             _ => 0.0,
         });
-        self.face_temperature
+        self.face_value
             .par_iter_mut()
             .with_min_len(GRAIN)
-            .enumerate()
-            .zip(self.face_law.par_iter())
-            .for_each(|((f, tf), law)| {
+            .zip(geometry.value_faces.par_iter())
+            .for_each(|(tf, &f)| {
+                let f = f as usize;
                 let [c0, c1] = mesh.face_cells[f];
                 let t0 = temp[c0 as usize];
-                *tf = match *law {
-                    FaceLaw::Diffusive { .. } => 0.5 * (t0 + temp[c1 as usize]),
-                    FaceLaw::Interface { w0, .. } => w0 * t0 + (1.0 - w0) * temp[c1 as usize],
-                    FaceLaw::Boundary { slot } => {
+                *tf = match geometry.face[f] {
+                    FaceGeometry::Diffusive { .. } => 0.5 * (t0 + temp[c1 as usize]),
+                    FaceGeometry::Interface { index, .. } => {
+                        let w0 = law[index as usize].w0;
+                        w0 * t0 + (1.0 - w0) * temp[c1 as usize]
+                    }
+                    FaceGeometry::Boundary { slot } => {
                         let bf = &boundary[slot as usize];
                         let (conductivity, normal_distance) =
                             (lam[c0 as usize], bf.normal_distance);
@@ -479,11 +557,15 @@ impl HeatStepper {
             });
     }
 
-    /// Stage 2: cell gradients from the cell and face temperatures: least squares (default;
-    /// rows e_k · ∇T = ΔT_k / |d_k| with unit directions to the neighbour centroid in the same
+    /// Stage 2, one pass over the cells: the cell gradient and, in fluid cells, its
+    /// Barth–Jespersen limiter ψ ∈ [0, 1]. Gradients: least squares (default; rows
+    /// e_k · ∇T = ΔT_k / |d_k| with unit directions to the neighbour centroid in the same
     /// medium or to the face centroid for interface and boundary face values, and Neumann
-    /// rows n · ∇T = q / λ on prescribed-flux faces; weights precomputed in `prepare`) or
-    /// Green–Gauss (A-Eq. 41) with the face values of stage 1.
+    /// rows n · ∇T = q / λ on prescribed-flux faces; weights cached in the geometry) or
+    /// Green–Gauss (A-Eq. 41) with the arithmetic face mean A-Eq. 42 inside a medium and the
+    /// face values of stage 1 elsewhere. The limiter keeps the reconstruction A-Eq. 48 at
+    /// every face centroid within the range of the cell, its stencil values (neighbour cells,
+    /// interface and boundary face values) and its other channel partners (S2S).
     pub fn gradients(
         &mut self,
         model: &HeatModel,
@@ -491,77 +573,95 @@ impl HeatStepper {
         mesh: &PoreMesh,
         temp: &[f64],
     ) {
-        let tf = &self.face_temperature;
+        let tv = &self.face_value;
         let source = &geometry.stencil_source;
         let weight = &geometry.stencil_weight;
-        let scheme = model.gradient;
-        self.gradient
-            .par_iter_mut()
-            .with_min_len(GRAIN)
-            .enumerate()
-            .for_each(|(c, g)| {
-                *g = match scheme {
-                    GradientScheme::GreenGauss => green_gauss(mesh, tf, c),
-                    GradientScheme::LeastSquares => {
-                        let tc = temp[c];
-                        let mut s = [0.0; 2];
-                        for k in 0..3 {
-                            let dt = stencil_value(source[c][k], temp, tf) - tc;
-                            s[0] += weight[c][k][0] * dt;
-                            s[1] += weight[c][k][1] * dt;
-                        }
-                        s
-                    }
-                };
-            });
-    }
-
-    /// Stage 3: Barth–Jespersen limiter ψ ∈ [0, 1] of each fluid cell's gradient, so that the
-    /// reconstruction A-Eq. 48 at every face centroid stays within the range of the cell, its
-    /// face neighbours (face values at interfaces and boundaries) and its S2S partners.
-    pub fn limiters(&mut self, geometry: &HeatGeometry, mesh: &PoreMesh, temp: &[f64]) {
-        let tf = &self.face_temperature;
-        let grad = &self.gradient;
-        let start = &geometry.cell_channel_start;
-        let partner = &geometry.cell_channel_partner;
-        let source = &geometry.stencil_source;
         let offset = &geometry.stencil_offset;
-        self.limiter
-            .par_iter_mut()
-            .with_min_len(GRAIN)
+        let flags = &geometry.cell_flags;
+        let start = &geometry.extra_partner_start;
+        let partner = &geometry.extra_partner;
+        let scheme = model.gradient;
+        (
+            self.gradient.par_chunks_mut(GRAIN),
+            self.limiter.par_chunks_mut(GRAIN),
+        )
+            .into_par_iter()
             .enumerate()
-            .for_each(|(c, psi)| {
-                if !mesh.cell_kind[c].is_fluid() {
-                    *psi = 1.0;
-                    return;
+            .for_each(|(chunk, (gradient, limiter))| {
+                let lo = chunk * GRAIN;
+                let hi = lo + gradient.len();
+                for (i, ((((((g, psi), &tc), src), w), offset), &flag)) in gradient
+                    .iter_mut()
+                    .zip(limiter.iter_mut())
+                    .zip(&temp[lo..hi])
+                    .zip(&source[lo..hi])
+                    .zip(&weight[lo..hi])
+                    .zip(&offset[lo..hi])
+                    .zip(&flags[lo..hi])
+                    .enumerate()
+                {
+                    let c = lo + i;
+                    let v = src.map(|s| stencil_value(s, temp, tv));
+                    let grad = match scheme {
+                        GradientScheme::LeastSquares => {
+                            let mut s = [0.0; 2];
+                            for k in 0..3 {
+                                let dt = v[k] - tc;
+                                s[0] += w[k][0] * dt;
+                                s[1] += w[k][1] * dt;
+                            }
+                            s
+                        }
+                        GradientScheme::GreenGauss => green_gauss(mesh, flag, c, tc, src, &v),
+                    };
+                    *g = grad;
+                    *psi = if flag & CELL_FLUID == 0 {
+                        1.0
+                    } else {
+                        let partners = &partner[start[c] as usize..start[c + 1] as usize];
+                        limiter_of(tc, &v, partners, temp, grad, offset)
+                    };
                 }
-                let tc = temp[c];
-                let (mut lo, mut hi) = (tc, tc);
-                for &src in &source[c] {
-                    let v = stencil_value(src, temp, tf);
-                    lo = lo.min(v);
-                    hi = hi.max(v);
-                }
-                for &other in &partner[start[c] as usize..start[c + 1] as usize] {
-                    let v = temp[other as usize];
-                    lo = lo.min(v);
-                    hi = hi.max(v);
-                }
-                let g = grad[c];
-                let mut p = 1.0f64;
-                for r in &offset[c] {
-                    let d = dot(g, *r);
-                    if d > 0.0 {
-                        p = p.min((hi - tc) / d);
-                    } else if d < 0.0 {
-                        p = p.min((lo - tc) / d);
-                    }
-                }
-                *psi = p.clamp(0.0, 1.0);
             });
     }
+}
 
-    /// Stage 4: heat into the first cell of each face [W]: A-Eq. 47 inside a medium, the
+/// Barth–Jespersen ψ ∈ [0, 1] of a fluid cell at `tc` with gradient `grad`: the bounds are
+/// the cell, its stencil values `v` and the temperatures of its extra `partners`; `offset`
+/// are the face centroids relative to the cell centroid.
+#[inline]
+fn limiter_of(
+    tc: f64,
+    v: &[f64; 3],
+    partners: &[u32],
+    temp: &[f64],
+    grad: [f64; 2],
+    offset: &[[f64; 2]; 3],
+) -> f64 {
+    let (mut lo, mut hi) = (tc, tc);
+    for &value in v.iter() {
+        lo = lo.min(value);
+        hi = hi.max(value);
+    }
+    for &other in partners {
+        let value = temp[other as usize];
+        lo = lo.min(value);
+        hi = hi.max(value);
+    }
+    let mut p = 1.0f64;
+    for r in offset {
+        let d = dot(grad, *r);
+        if d > 0.0 {
+            p = p.min((hi - tc) / d);
+        } else if d < 0.0 {
+            p = p.min((lo - tc) / d);
+        }
+    }
+    p.clamp(0.0, 1.0)
+}
+
+impl HeatStepper {
+    /// Stage 3: heat into the first cell of each face [W]: A-Eq. 47 inside a medium, the
     /// series conductance at fluid–solid interfaces, cases I–III and advection through open
     /// boundary faces.
     pub fn face_heat(
@@ -577,72 +677,87 @@ impl HeatStepper {
         let psi = &self.limiter;
         let cp = &self.specific_heat;
         let lam = &self.conductivity;
+        let law = &self.interface_law;
         let boundary = &geometry.boundary;
         let t_ref = model.reference_temperature;
         let sides: [f64; 5] = std::array::from_fn(|k| match &model.sides[k] {
             SideCondition::Temperature(s) => s.at(t),
             _ => 0.0,
         });
-        self.face_heat
-            .par_iter_mut()
-            .with_min_len(GRAIN)
+        (
+            self.face_heat.par_chunks_mut(GRAIN),
+            mesh.face_cells.par_chunks(GRAIN),
+            geometry.face.par_chunks(GRAIN),
+        )
+            .into_par_iter()
             .enumerate()
-            .zip(self.face_law.par_iter())
-            .for_each(|((f, q), law)| {
-                let [c0, c1] = mesh.face_cells[f];
-                let c0 = c0 as usize;
-                let t0 = temp[c0];
-                *q = match *law {
-                    FaceLaw::Diffusive { g, cross } => {
-                        let c1 = c1 as usize;
-                        let (g0, g1) = (grad[c0], grad[c1]);
-                        let mean = [0.5 * (g0[0] + g1[0]), 0.5 * (g0[1] + g1[1])];
-                        g * (temp[c1] - t0) + dot(cross, mean)
-                    }
-                    FaceLaw::Interface { g, .. } => g * (temp[c1 as usize] - t0),
-                    FaceLaw::Boundary { slot } => {
-                        let BoundaryFace {
-                            side,
-                            normal_distance,
-                            area,
-                            tangent,
-                        } = boundary[slot as usize];
-                        let conductivity = lam[c0];
-                        let cond = &model.sides[side as usize];
-                        // Temperature at the foot of the normal through the face centroid.
-                        let t_foot = t0 + dot(grad[c0], tangent);
-                        let diffusive = match cond {
-                            SideCondition::Temperature(_) => {
-                                conductivity * area / normal_distance
-                                    * (sides[side as usize] - t_foot)
-                            }
-                            SideCondition::HeatFlux(flux) => flux * area,
-                            SideCondition::Convective { ambient, .. } => {
-                                boundary_conductance(cond, conductivity, normal_distance, area)
-                                    * (ambient - t_foot)
-                            }
-                        };
-                        let m = input.boundary_mass_flux[f];
-                        let advective = if m > 0.0 {
-                            let r = sub(mesh.face_centroid[f], mesh.cell_centroid[c0]);
-                            let tface = t0 + psi[c0] * dot(grad[c0], r);
-                            -m * cp[c0] * (tface - t_ref)
-                        } else if m < 0.0 {
-                            let t_in = match cond {
-                                SideCondition::Temperature(_) => sides[side as usize],
-                                _ => t0,
+            .for_each(|(chunk, (heat, cells, faces))| {
+                for (i, ((q, &[c0, c1]), geo)) in heat.iter_mut().zip(cells).zip(faces).enumerate()
+                {
+                    let f = chunk * GRAIN + i;
+                    let c0 = c0 as usize;
+                    let t0 = temp[c0];
+                    *q = match *geo {
+                        FaceGeometry::Diffusive {
+                            conductance,
+                            cross,
+                            d0,
+                            d1,
+                        } => {
+                            let c1 = c1 as usize;
+                            let lf = face_conductivity(lam[c0], lam[c1], d0, d1);
+                            let (g0, g1) = (grad[c0], grad[c1]);
+                            let mean = [0.5 * (g0[0] + g1[0]), 0.5 * (g0[1] + g1[1])];
+                            lf * conductance * (temp[c1] - t0)
+                                + dot([lf * cross[0], lf * cross[1]], mean)
+                        }
+                        FaceGeometry::Interface { index, .. } => {
+                            law[index as usize].g * (temp[c1 as usize] - t0)
+                        }
+                        FaceGeometry::Boundary { slot } => {
+                            let BoundaryFace {
+                                side,
+                                normal_distance,
+                                area,
+                                tangent,
+                            } = boundary[slot as usize];
+                            let conductivity = lam[c0];
+                            let cond = &model.sides[side as usize];
+                            // Temperature at the foot of the normal through the face centroid.
+                            let t_foot = t0 + dot(grad[c0], tangent);
+                            let diffusive = match cond {
+                                SideCondition::Temperature(_) => {
+                                    conductivity * area / normal_distance
+                                        * (sides[side as usize] - t_foot)
+                                }
+                                SideCondition::HeatFlux(flux) => flux * area,
+                                SideCondition::Convective { ambient, .. } => {
+                                    boundary_conductance(cond, conductivity, normal_distance, area)
+                                        * (ambient - t_foot)
+                                }
                             };
-                            -m * cp[c0] * (t_in - t_ref)
-                        } else {
-                            0.0
-                        };
-                        diffusive + advective
-                    }
-                };
+                            let m = input.boundary_mass_flux[f];
+                            let advective = if m > 0.0 {
+                                let r = sub(mesh.face_centroid[f], mesh.cell_centroid[c0]);
+                                let tface = t0 + psi[c0] * dot(grad[c0], r);
+                                -m * cp[c0] * (tface - t_ref)
+                            } else if m < 0.0 {
+                                let t_in = match cond {
+                                    SideCondition::Temperature(_) => sides[side as usize],
+                                    _ => t0,
+                                };
+                                -m * cp[c0] * (t_in - t_ref)
+                            } else {
+                                0.0
+                            };
+                            diffusive + advective
+                        }
+                    };
+                }
             });
     }
 
-    /// Stage 5: heat carried along each channel from its first to its second cell [W]:
+    /// Stage 4: heat carried along each channel from its first to its second cell [W]:
     /// advection ṁ c_p (T_f − T_ref) with the limited second-order upwind value T_f (A-Eq. 48)
     /// at the shared face of T2T channels (first-order upwind in S2S channels, which have no
     /// face) and, in S2S channels, conduction λ_eff A_k (T_i − T_j) / L_k (A-Eq. 40).
@@ -661,62 +776,103 @@ impl HeatStepper {
         let points = &geometry.channel_point;
         let t_ref = model.reference_temperature;
         let ch = &mesh.channels;
-        self.channel_heat
-            .par_iter_mut()
-            .with_min_len(GRAIN)
-            .enumerate()
-            .for_each(|(k, q)| {
-                let [a, b] = ch.cells[k].map(|c| c as usize);
-                let m = input.channel_mass_flux[k];
-                let adv = if m != 0.0 {
-                    let up = if m > 0.0 { a } else { b };
-                    let tf = match ch.kind[k] {
-                        ChannelKind::T2T => {
-                            let r = sub(points[k], mesh.cell_centroid[up]);
-                            temp[up] + psi[up] * dot(grad[up], r)
-                        }
-                        // No face: first-order upwind.
-                        ChannelKind::S2S => temp[up],
+        (
+            self.channel_heat.par_chunks_mut(GRAIN),
+            ch.cells.par_chunks(GRAIN),
+            ch.kind.par_chunks(GRAIN),
+            input.channel_mass_flux.par_chunks(GRAIN),
+            points.par_chunks(GRAIN),
+            g.par_chunks(GRAIN),
+        )
+            .into_par_iter()
+            .for_each(|(heat, cells, kinds, fluxes, points, g)| {
+                for (((((q, cells), kind), &m), point), &g) in heat
+                    .iter_mut()
+                    .zip(cells)
+                    .zip(kinds)
+                    .zip(fluxes)
+                    .zip(points)
+                    .zip(g)
+                {
+                    let [a, b] = cells.map(|c| c as usize);
+                    let adv = if m != 0.0 {
+                        let up = if m > 0.0 { a } else { b };
+                        let tf = match kind {
+                            ChannelKind::T2T => {
+                                let r = sub(*point, mesh.cell_centroid[up]);
+                                temp[up] + psi[up] * dot(grad[up], r)
+                            }
+                            // No face: first-order upwind.
+                            ChannelKind::S2S => temp[up],
+                        };
+                        m * cp[up] * (tf - t_ref)
+                    } else {
+                        0.0
                     };
-                    m * cp[up] * (tf - t_ref)
-                } else {
-                    0.0
-                };
-                *q = adv + g[k] * (temp[a] - temp[b]);
+                    *q = adv + g * (temp[a] - temp[b]);
+                }
             });
     }
 
-    /// Stage 6: T ← T + h (Σ heat in) / C per cell (A-Eqs. 39, 50), gathering face and channel
-    /// heat in a fixed order.
-    pub fn advance(&mut self, geometry: &HeatGeometry, mesh: &PoreMesh, temp: &mut [f64], h: f64) {
+    /// Stage 5: T ← T + h (Σ heat in) / C per cell (A-Eqs. 39, 50), gathering face and channel
+    /// heat in a fixed order. Returns the first cell whose new temperature is not finite.
+    pub fn advance(
+        &mut self,
+        geometry: &HeatGeometry,
+        mesh: &PoreMesh,
+        temp: &mut [f64],
+        h: f64,
+    ) -> Option<usize> {
         let qf = &self.face_heat;
         let qc = &self.channel_heat;
         let cap = &self.capacity;
+        let flags = &geometry.cell_flags;
         let start = &geometry.cell_channel_start;
         let cell_channel = &geometry.cell_channel;
-        temp.par_iter_mut()
-            .with_min_len(GRAIN)
+        (
+            temp.par_chunks_mut(GRAIN),
+            mesh.cell_faces.par_chunks(GRAIN),
+            flags.par_chunks(GRAIN),
+            cap.par_chunks(GRAIN),
+        )
+            .into_par_iter()
             .enumerate()
-            .for_each(|(c, t)| {
-                let mut s = 0.0;
-                for &f in &mesh.cell_faces[c] {
-                    let f = f as usize;
-                    if mesh.face_cells[f][0] == c as u32 {
-                        s += qf[f];
-                    } else {
-                        s -= qf[f];
+            .map(|(chunk, (temp, faces, flags, cap))| {
+                let lo = chunk * GRAIN;
+                let start = &start[lo..=lo + temp.len()];
+                let mut bad = None;
+                for (i, ((((t, faces), &flag), &cap), range)) in temp
+                    .iter_mut()
+                    .zip(faces)
+                    .zip(flags)
+                    .zip(cap)
+                    .zip(start.windows(2))
+                    .enumerate()
+                {
+                    let mut s = 0.0;
+                    for (j, &f) in faces.iter().enumerate() {
+                        if flag & (CELL_FIRST << j) != 0 {
+                            s += qf[f as usize];
+                        } else {
+                            s -= qf[f as usize];
+                        }
+                    }
+                    for &(k, second) in &cell_channel[range[0] as usize..range[1] as usize] {
+                        let q = qc[k as usize];
+                        if second {
+                            s += q;
+                        } else {
+                            s -= q;
+                        }
+                    }
+                    *t += h * s / cap;
+                    if bad.is_none() && !t.is_finite() {
+                        bad = Some(lo + i);
                     }
                 }
-                for &(k, second) in &cell_channel[start[c] as usize..start[c + 1] as usize] {
-                    let q = qc[k as usize];
-                    if second {
-                        s += q;
-                    } else {
-                        s -= q;
-                    }
-                }
-                *t += h * s / cap[c];
-            });
+                bad
+            })
+            .reduce(|| None, |a, b| a.or(b))
     }
 
     /// Total enthalpy Σ C_i (T_i − T_ref) [J] of all cells, with the capacities of the last
@@ -735,16 +891,30 @@ impl HeatStepper {
     }
 }
 
-fn green_gauss(mesh: &PoreMesh, tf: &[f64], c: usize) -> [f64; 2] {
+/// Green–Gauss gradient (A-Eq. 41) of cell `c` from its stencil values `v`: the arithmetic
+/// mean A-Eq. 42 where the source is a neighbour cell, the face value otherwise.
+fn green_gauss(
+    mesh: &PoreMesh,
+    flag: u8,
+    c: usize,
+    tc: f64,
+    source: &[u32; 3],
+    v: &[f64; 3],
+) -> [f64; 2] {
     let mut s = [0.0; 2];
-    for &f in &mesh.cell_faces[c] {
+    for (k, &f) in mesh.cell_faces[c].iter().enumerate() {
         let f = f as usize;
-        let sign = if mesh.face_cells[f][0] == c as u32 {
+        let tf = if source[k] & FACE_VALUE != 0 {
+            v[k]
+        } else {
+            0.5 * (tc + v[k])
+        };
+        let sign = if flag & (CELL_FIRST << k) != 0 {
             1.0
         } else {
             -1.0
         };
-        let w = sign * tf[f] * mesh.face_length[f];
+        let w = sign * tf * mesh.face_length[f];
         s[0] += w * mesh.face_normal[f][0];
         s[1] += w * mesh.face_normal[f][1];
     }
@@ -753,9 +923,15 @@ fn green_gauss(mesh: &PoreMesh, tf: &[f64], c: usize) -> [f64; 2] {
 }
 
 #[inline]
-fn stencil_value(source: u32, temp: &[f64], face_temperature: &[f64]) -> f64 {
+fn temperature_ok(t: f64) -> bool {
+    // Finite and > 0 K (false for NaN).
+    (t > 0.0) & (t < f64::INFINITY)
+}
+
+#[inline]
+fn stencil_value(source: u32, temp: &[f64], face_value: &[f64]) -> f64 {
     if source & FACE_VALUE != 0 {
-        face_temperature[(source & !FACE_VALUE) as usize]
+        face_value[(source & !FACE_VALUE) as usize]
     } else {
         temp[source as usize]
     }
