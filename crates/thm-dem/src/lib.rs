@@ -106,11 +106,13 @@
 //! events) is owned by the caller and round-trips through serde bit for bit; parameters are
 //! serde structs validated once ([`StepperParams`], [`CohesiveFrictionalParams`],
 //! [`LinearSpringParams`]); the [`Stepper`] holds only scratch buffers. A step is a fixed
-//! sequence of stages (neighbour update, contact forces, events, gather, integrate) each public
-//! and testable. Contacts are computed in parallel (rayon), each writing only its own entry;
-//! each particle then sums its own contacts in contact-index order, so 1 and 2 threads give
-//! identical bits. Neighbour search is an O(N) cell grid with a Verlet skin. Once the contact
-//! lists are warm a step does not allocate. Unstable runs stop with
+//! sequence of stages (neighbour update, contact forces, events, gather with integration).
+//! Contacts are computed in parallel (rayon), each writing only its own entry; each particle
+//! then sums its own contacts in contact-index order, so 1 and 2 threads give identical bits.
+//! Neighbour search is an O(N) cell grid with a Verlet skin; a listed pair found apart is not
+//! looked at again until the particles' drift could have closed its gap, so the skin changes
+//! the cost, never the result (a test compares the bits of a wide and a thin skin). Once the
+//! contact lists are warm a step does not allocate. Unstable runs stop with
 //! [`DemError::NonFinite`] naming the particle and the step.
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
