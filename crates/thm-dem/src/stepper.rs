@@ -8,9 +8,11 @@
 //!    sheared) costs one distance, and is not looked at again until the drift since then
 //!    could have closed its gap; reports whether a bond broke (a boolean OR);
 //! 3. events: broken-bond events (the contacts are scanned only when a bond broke) and wall
-//!    forces, serially in contact order;
+//!    forces, serially in contact order; when at most a quarter of the contacts carried
+//!    force, the particles that have one are marked;
 //! 4. gather and integrate, one pass over the particles: every particle sums its own contacts
-//!    in contact-index order (those that carried force), plus external force and gravity (no
+//!    in contact-index order (those that carried force; none for an unmarked particle when
+//!    particles were marked), plus external force and gravity (no
 //!    atomics: the same bits for any thread count), then Cundall's non-viscous damping
 //!    (A-Eq. 7) and leapfrog, with the finiteness check (the first bad particle is a minimum
 //!    over indices);
@@ -98,8 +100,12 @@ pub struct Stepper<L: ContactLaw> {
     index_key: Option<(u64, usize, usize, usize)>,
     /// Whether each contact carried force in this step: the gather skips the others, whose
     /// force and torques are zero.
-    active: Vec<bool>,
-    wall_active: Vec<bool>,
+    active: Vec<u8>,
+    wall_active: Vec<u8>,
+    /// `touched[i] == stamp` when particle `i` has a contact that carried force in this step
+    /// (kept only when few contacts did: the gather then skips the other particles).
+    touched: Vec<u32>,
+    stamp: u32,
     /// A listed pair found apart (and unbonded, without shear) stays apart while the drift
     /// (see [`Drift`]) is below its entry: it is not looked at again until then.
     quiet_below: Vec<f64>,
@@ -138,6 +144,8 @@ impl<L: ContactLaw> Stepper<L> {
             index_key: None,
             active: Vec::new(),
             wall_active: Vec::new(),
+            touched: Vec::new(),
+            stamp: 0,
             quiet_below: Vec::new(),
         }
     }
@@ -161,9 +169,10 @@ impl<L: ContactLaw> Stepper<L> {
     /// One time step. Runs in the current rayon pool; the result does not depend on its size.
     pub fn step(&mut self, state: &mut DemState) -> Result<(), DemError> {
         let drift = self.update_neighbours(state)?;
-        let any_broke = self.compute_contact_forces(state, drift);
+        let (any_broke, active_count) = self.compute_contact_forces(state, drift);
         self.collect_events(state, any_broke);
-        self.gather_and_integrate(state)?;
+        let sparse = self.mark_touched(state, active_count);
+        self.gather_and_integrate(state, sparse)?;
         let dt = self.config.params.time_step;
         for w in &mut state.walls {
             w.point += w.velocity * dt;
@@ -307,9 +316,10 @@ impl<L: ContactLaw> Stepper<L> {
 
     /// Stage 2: forces of all particle–particle and particle–wall contacts, in parallel.
     /// Returns whether a bond broke in this step (an OR over contacts: the same for any
-    /// thread count), so that stage 3 scans the responses only then. `drift` is the pair
-    /// bound `D` of [`Drift`] for this step.
-    fn compute_contact_forces(&mut self, state: &mut DemState, drift: f64) -> bool {
+    /// thread count), so that stage 3 scans the responses only then, and how many
+    /// particle–particle contacts carried force. `drift` is the pair bound `D` of [`Drift`]
+    /// for this step.
+    fn compute_contact_forces(&mut self, state: &mut DemState, drift: f64) -> (bool, usize) {
         let dt = self.config.params.time_step;
         let law = &self.law;
         let DemState {
@@ -326,13 +336,13 @@ impl<L: ContactLaw> Stepper<L> {
             &p.angular_velocity[..],
             &p.temperature[..],
         );
-        self.active.resize(contacts.len(), false);
-        self.wall_active.resize(wall_contacts.len(), false);
+        self.active.resize(contacts.len(), 0);
+        self.wall_active.resize(wall_contacts.len(), 0);
         type Item<'a> = (
             (
                 (
                     (&'a mut ContactHistory, &'a mut ContactResponse),
-                    &'a mut bool,
+                    &'a mut u8,
                 ),
                 &'a mut f64,
             ),
@@ -342,8 +352,8 @@ impl<L: ContactLaw> Stepper<L> {
             // Proven apart since it was last looked at (below): nothing to do. The bond state
             // is read again so that a bond installed meanwhile acts at once.
             if drift < *quiet && h.bond != BondState::Intact {
-                *active = false;
-                return false;
+                *active = 0;
+                return 0;
             }
             let (a, b) = (pair[0] as usize, pair[1] as usize);
             let (ra, rb) = (radius[a], radius[b]);
@@ -364,8 +374,8 @@ impl<L: ContactLaw> Stepper<L> {
                     if reach > 0.0 {
                         *quiet = 0.5 * (d2.sqrt() - reach - 1e-9 * reach) - drift;
                     }
-                    *active = false;
-                    return false;
+                    *active = 0;
+                    return 0;
                 }
             }
             *quiet = f64::NEG_INFINITY;
@@ -376,8 +386,9 @@ impl<L: ContactLaw> Stepper<L> {
                 temperature: 0.5 * (t[a] + t[b]),
             };
             *r = law.respond(&input, &kin, h);
-            *active = r.active;
-            r.broke.is_some()
+            *active = u8::from(r.active);
+            // Bit 0: a bond broke; bit 1: the contact carried force.
+            u8::from(r.broke.is_some()) | (*active << 1)
         };
         // Blocks of contacts, each a plain loop (the per-item cost of rayon's adaptors is
         // comparable to that of a listed pair that does not touch).
@@ -385,7 +396,7 @@ impl<L: ContactLaw> Stepper<L> {
             (
                 (
                     (&'a mut [ContactHistory], &'a mut [ContactResponse]),
-                    &'a mut [bool],
+                    &'a mut [u8],
                 ),
                 &'a mut [f64],
             ),
@@ -397,9 +408,12 @@ impl<L: ContactLaw> Stepper<L> {
                 .zip(a.iter_mut())
                 .zip(q.iter_mut())
                 .zip(p.iter())
-                .fold(false, |broke, item| particle_contact(item) | broke)
+                .fold((false, 0), |(broke, count), item| {
+                    let bits = particle_contact(item);
+                    (broke | (bits & 1 != 0), count + usize::from(bits >> 1))
+                })
         };
-        let any_broke = if contacts.len() >= PAR_THRESHOLD {
+        let (any_broke, active_count) = if contacts.len() >= PAR_THRESHOLD {
             contacts
                 .history
                 .par_chunks_mut(MIN_PAR_LEN)
@@ -408,7 +422,7 @@ impl<L: ContactLaw> Stepper<L> {
                 .zip(self.quiet_below.par_chunks_mut(MIN_PAR_LEN))
                 .zip(contacts.pair.par_chunks(MIN_PAR_LEN))
                 .map(chunk)
-                .reduce(|| false, |x, y| x | y)
+                .reduce(|| (false, 0), |x, y| (x.0 | y.0, x.1 + y.1))
         } else {
             chunk((
                 (
@@ -425,7 +439,7 @@ impl<L: ContactLaw> Stepper<L> {
         type WallItem<'a> = (
             (
                 (&'a mut ContactHistory, &'a mut ContactResponse),
-                &'a mut bool,
+                &'a mut u8,
             ),
             &'a [u32; 2],
         );
@@ -440,7 +454,7 @@ impl<L: ContactLaw> Stepper<L> {
                         h.normal = Vec3::ZERO;
                         *r = ContactResponse::default();
                     }
-                    *active = false;
+                    *active = 0;
                     return;
                 }
             }
@@ -460,7 +474,7 @@ impl<L: ContactLaw> Stepper<L> {
                 temperature: t[a],
             };
             *r = law.respond(&input, &kin, h);
-            *active = r.active;
+            *active = u8::from(r.active);
         };
         if wall_contacts.len() >= PAR_THRESHOLD {
             wall_contacts
@@ -485,7 +499,50 @@ impl<L: ContactLaw> Stepper<L> {
                 .zip(wall_contacts.pair.iter())
                 .for_each(wall_contact);
         }
-        any_broke
+        (any_broke, active_count)
+    }
+
+    /// When at most a quarter of the particle–particle contacts carried force, stamps the
+    /// particles that have one (a serial scan of the flags, eight at a time) so that the
+    /// gather skips the others; returns whether it did. Skipping changes no bit: those
+    /// particles would add only zeros.
+    fn mark_touched(&mut self, state: &DemState, active_count: usize) -> bool {
+        if active_count.saturating_mul(4) > state.contacts.len() {
+            return false;
+        }
+        let n = state.particles.len();
+        if self.touched.len() != n {
+            self.touched.clear();
+            self.touched.resize(n, 0);
+        }
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.touched.fill(0);
+            self.stamp = 1;
+        }
+        let (touched, stamp) = (&mut self.touched[..], self.stamp);
+        for (flags, pairs, both) in [
+            (&self.active[..], &state.contacts.pair[..], true),
+            (&self.wall_active[..], &state.wall_contacts.pair[..], false),
+        ] {
+            for (word, pairs) in flags.chunks(8).zip(pairs.chunks(8)) {
+                let any = match <[u8; 8]>::try_from(word) {
+                    Ok(w) => u64::from_le_bytes(w) != 0,
+                    Err(_) => word.iter().any(|&f| f != 0),
+                };
+                if any {
+                    for (&f, p) in word.iter().zip(pairs) {
+                        if f != 0 {
+                            touched[p[0] as usize] = stamp;
+                            if both {
+                                touched[p[1] as usize] = stamp;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        true
     }
 
     /// Stage 3: broken-bond events (in contact order; the contacts are scanned only when
@@ -523,7 +580,7 @@ impl<L: ContactLaw> Stepper<L> {
     /// finiteness check (the first bad particle is a minimum over indices). Fixed particles
     /// move at their prescribed velocity; plane kinematics keep `z = 0`, `v_z = 0`,
     /// `ω_x = ω_y = 0`.
-    fn gather_and_integrate(&self, state: &mut DemState) -> Result<(), DemError> {
+    fn gather_and_integrate(&self, state: &mut DemState, sparse: bool) -> Result<(), DemError> {
         let g = self.config.gravity;
         let dt = self.config.params.time_step;
         let alpha = self.config.params.damping;
@@ -554,6 +611,7 @@ impl<L: ContactLaw> Stepper<L> {
         let (wresp, wactive) = (&wall_contacts.response[..], &self.wall_active[..]);
         let (a_start, b_start, b_entry) = (&self.a_start[..], &self.b_start[..], &self.b_entry);
         let wall_start = &self.wall_start[..];
+        let (touched, stamp) = (&self.touched[..], self.stamp);
         type Block<'a> = (
             usize,
             (
@@ -597,25 +655,27 @@ impl<L: ContactLaw> Stepper<L> {
                 let i = s + j;
                 let mut fi = Vec3::ZERO;
                 let mut ti = Vec3::ZERO;
-                for &k in &b_entry[b_range[0] as usize..b_range[1] as usize] {
-                    let k = k as usize;
-                    if active[k] {
-                        fi += resp[k].force_on_b;
-                        ti += resp[k].torque_on_b;
+                if !(sparse && touched[i] != stamp) {
+                    for &k in &b_entry[b_range[0] as usize..b_range[1] as usize] {
+                        let k = k as usize;
+                        if active[k] != 0 {
+                            fi += resp[k].force_on_b;
+                            ti += resp[k].torque_on_b;
+                        }
                     }
-                }
-                let own = a_range[0] as usize..a_range[1] as usize;
-                for (r, &on) in resp[own.clone()].iter().zip(&active[own]) {
-                    if on {
-                        fi -= r.force_on_b;
-                        ti += r.torque_on_a;
+                    let own = a_range[0] as usize..a_range[1] as usize;
+                    for (r, &on) in resp[own.clone()].iter().zip(&active[own]) {
+                        if on != 0 {
+                            fi -= r.force_on_b;
+                            ti += r.torque_on_a;
+                        }
                     }
-                }
-                let own = w_range[0] as usize..w_range[1] as usize;
-                for (r, &on) in wresp[own.clone()].iter().zip(&wactive[own]) {
-                    if on {
-                        fi -= r.force_on_b;
-                        ti += r.torque_on_a;
+                    let own = w_range[0] as usize..w_range[1] as usize;
+                    for (r, &on) in wresp[own.clone()].iter().zip(&wactive[own]) {
+                        if on != 0 {
+                            fi -= r.force_on_b;
+                            ti += r.torque_on_a;
+                        }
                     }
                 }
                 *f_out = fi + *fe + g * m;
