@@ -92,10 +92,11 @@
 //! Small overlaps (`U/R` ≲ 0.1 at contacts that were never bonded), quasi-static or moderately
 //! dynamic loading, `Δt` below [`critical_time_step`]. Linear contact springs (no Hertz).
 //!
-//! In 2D the shear force is carried from the old tangent to the new one directly (its
-//! component along the old tangent `(−n_y, n_x)` is put on the new tangent); this equals the
-//! 3D rotation-and-projection to round-off (property test in [`vector`]). The twist about the
-//! normal is zero for disks.
+//! In 3D the shear force (a vector of the old tangent plane) is carried by the exact minimal
+//! rotation `F − (n·F)/(1 + n₀·n) (n₀ + n)` and the exact twist about the new normal; in 2D
+//! its component along the old tangent `(−n_y, n_x)` is put on the new tangent. Both equal
+//! the general rotation followed by a projection to round-off (property tests in [`vector`]).
+//! The twist about the normal is zero for disks.
 //!
 //! Input ranges are checked by [`validate`] (a structured [`OutOfRange`] that this crate's
 //! [`DemError`] and the crates built on it wrap).
