@@ -469,9 +469,9 @@ pub struct DemState {
     /// Wall points at the last neighbour search.
     pub search_reference_wall_point: Vec<Vec3>,
     /// Incremented whenever the contact lists change membership (a stepper rebuilds its
-    /// per-particle contact index when it sees a new value). A caller that edits the history
-    /// of a contact that does not touch (other than installing a bond, which is always seen)
-    /// increments it too, so that the stepper looks at every listed pair again.
+    /// per-particle contact index when it sees a new value). A caller that edits the
+    /// `reference_penetration` or the shear force of a contact that is not bonded and does not
+    /// touch increments it too, so that the stepper looks at every listed pair again.
     pub contact_generation: u64,
 }
 

@@ -349,9 +349,10 @@ impl<L: ContactLaw> Stepper<L> {
             &'a [u32; 2],
         );
         let particle_contact = |((((h, r), active), quiet), pair): Item<'_>| {
-            // Proven apart since it was last looked at (below): nothing to do. The bond state
-            // is read again so that a bond installed meanwhile acts at once.
-            if drift < *quiet && h.bond != BondState::Intact {
+            // Proven apart since it was last looked at (below), and its history is still the
+            // cleared one (any evaluation sets the normal; a bond installed meanwhile or a
+            // restored state is seen at once).
+            if drift < *quiet && h.bond != BondState::Intact && is_zero(h.normal) {
                 *active = 0;
                 return 0;
             }

@@ -542,3 +542,48 @@ fn verlet_skin_and_skipped_pairs_do_not_change_a_bit() {
     };
     assert_eq!(bits(&wide), bits(&thin));
 }
+
+/// A stepper holds only scratch: taking a saved state back (same contact generation, so the
+/// stepper keeps its index and its record of pairs found apart, made on the states after the
+/// saved one) and stepping on gives the bits of a fresh stepper.
+#[test]
+fn a_stepper_carries_nothing_from_one_state_to_another() {
+    let p = jittered_lattice(Kinematics::Spheres3d, 8, 8, 8, 9, 0.05);
+    let floor = Wall::new(Vec3::new(0.0, 0.0, -6e-4), Vec3::new(0.0, 0.0, 1.0)).unwrap();
+    let mut state = DemState::new(p, vec![floor]);
+    let law = LinearSpringParams {
+        normal_stiffness: 2e4,
+        tangential_stiffness: 1e4,
+        friction_coefficient: 0.4,
+        thermal_bond: None,
+    }
+    .validate()
+    .unwrap();
+    let dt = 0.2 * critical_time_step(&state, &law);
+    let mut params = stepper_params(dt, 0.05);
+    params.gravity = [0.0, 0.0, -9.81];
+    params.verlet_skin = 1e-3;
+    let config = params.validate().unwrap();
+    let mut stepper = Stepper::new(law, config);
+    stepper.run(&mut state, 100).unwrap();
+    // Save right after a search; continue while no other search happens.
+    let generation = state.contact_generation;
+    while state.contact_generation == generation {
+        stepper.step(&mut state).unwrap();
+    }
+    let saved = state.clone();
+    let mut steps = 0;
+    while steps < 60 && state.contact_generation == saved.contact_generation {
+        stepper.step(&mut state).unwrap();
+        steps += 1;
+    }
+    let steps = steps - u64::from(state.contact_generation != saved.contact_generation);
+    let mut again = saved.clone();
+    stepper.run(&mut again, steps).unwrap();
+    let mut first = saved.clone();
+    Stepper::new(law, config).run(&mut first, steps).unwrap();
+    assert!(steps >= 20, "{steps} steps without a search");
+    assert_eq!(again.contact_generation, saved.contact_generation);
+    assert!(first.contacts.len() > 4 * first.contacts.active_count());
+    assert_eq!(again, first);
+}
