@@ -160,17 +160,37 @@ fn bed_state(p: &Packing) -> Result<DemState, String> {
     Ok(DemState::new(particles, vec![floor]))
 }
 
-/// A lattice of spheres (radius 0.46–0.52 mm, spacing 1 mm, square footprint, ~N/side² layers)
-/// dropped onto a floor and settled with damping, then written without bonds.
+/// A jittered lattice of spheres (radius 0.40–0.45 mm, spacing 1 mm, square footprint,
+/// ~N/side² layers, every other layer shifted by half a spacing in x and y so that each sphere
+/// falls into the pocket between four below it instead of onto a column), dropped onto a floor
+/// between four side walls and settled with damping, then written without bonds. Fails unless
+/// the bed has settled (coordination ≥ 3).
 fn write_bed(path: &Path, n: usize) -> Result<(), String> {
     let side = ((n as f64) / 10.0).sqrt().round().max(1.0) as usize;
     let layers = n.div_ceil(side * side);
     let lattice = lattice_packing(Kinematics::Spheres3d, [side, side, layers], BED_SPACING, 7)
         .map_err(|e| e.to_string())?;
-    let radii: Vec<f64> = lattice.radii.iter().map(|r| r * 0.92).collect();
+    // Radii 0.8 × [0.5, 0.56] spacing: no two spheres of the jittered lattice touch at the start
+    // (largest diameter 0.9 mm, nearest centres 0.96 mm apart), so nothing starts compressed.
+    let mut centres = Vec::with_capacity(lattice.centres.len());
+    let mut radii = Vec::with_capacity(lattice.centres.len());
+    let last = (side as f64 - 1.0) * BED_SPACING;
+    for (c, r) in lattice.centres.iter().zip(&lattice.radii) {
+        let layer = (c.z / BED_SPACING).round() as usize;
+        let mut c = *c;
+        if layer % 2 == 1 {
+            c.x += 0.5 * BED_SPACING;
+            c.y += 0.5 * BED_SPACING;
+            if c.x > last + 0.1 * BED_SPACING || c.y > last + 0.1 * BED_SPACING {
+                continue;
+            }
+        }
+        centres.push(c);
+        radii.push(0.8 * r);
+    }
     let packing = Packing {
         kinematics: Kinematics::Spheres3d,
-        centres: lattice.centres,
+        centres,
         radii,
         bonds: Vec::new(),
     };
@@ -189,14 +209,47 @@ fn write_bed(path: &Path, n: usize) -> Result<(), String> {
     }
     let law = bed_law()?;
     let dt = 0.3 * critical_time_step(&state, &law);
-    let params = StepperParams {
-        time_step: dt,
-        damping: 0.3,
-        gravity: [0.0, 0.0, -9.81],
-        verlet_skin: 1e-4,
-    };
-    let mut stepper = Stepper::new(law, params.validate().map_err(|e| e.to_string())?);
-    stepper.run(&mut state, 20_000).map_err(|e| e.to_string())?;
+    // The lattice's layers stand up to 0.16 mm apart: under 1 g the top layer would need
+    // ~14 ms (~3·10⁴ steps) of free fall alone to land. Pack it first under 100 g (the weight of
+    // ten layers then compresses the bottom contacts by ~5·10⁻⁸ m, 10⁻⁴ of a radius), then let it
+    // relax under 1 g, both with Cundall damping, until it is at rest and every sphere rests on
+    // others: a settled bed, whose contacts are what the run times.
+    for (gravity, damping, steps) in [(100.0 * 9.81, 0.3, 20_000), (9.81, 0.6, 40_000)] {
+        let params = StepperParams {
+            time_step: dt,
+            damping,
+            gravity: [0.0, 0.0, -gravity],
+            verlet_skin: 1e-4,
+        };
+        let mut stepper = Stepper::new(law, params.validate().map_err(|e| e.to_string())?);
+        stepper.run(&mut state, steps).map_err(|e| e.to_string())?;
+    }
+    let max_speed = state
+        .particles
+        .velocity
+        .iter()
+        .map(|v| v.norm())
+        .fold(0.0_f64, f64::max);
+    let z = state.coordination_number();
+    let fast = state
+        .particles
+        .velocity
+        .iter()
+        .filter(|v| v.norm() > 1e-2)
+        .count();
+    let (zmin, zmax) = state
+        .particles
+        .position
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.z), b.max(p.z)));
+    eprintln!(
+        "bed settled: coordination {z:.2}, largest speed {max_speed:.2e} m/s, {fast} faster than 1 cm/s, z {zmin:e}..{zmax:e}"
+    );
+    if z < 3.0 {
+        return Err(format!(
+            "bed did not settle: coordination {z:.2} < 3 after 60 000 steps"
+        ));
+    }
     let settled = Packing {
         kinematics: Kinematics::Spheres3d,
         centres: state.particles.position.clone(),

@@ -112,10 +112,15 @@ impl<V: SpaceVector> ContactKinematics<V> {
             V::UNIT_X
         };
         let penetration = radius_a + radius_b - distance;
-        let lever_a = normal * (radius_a - 0.5 * penetration);
-        let lever_b = normal * -(radius_b - 0.5 * penetration);
-        let v_rel = relative_velocity + V::angular_cross(angular_velocity_b, lever_b)
-            - V::angular_cross(angular_velocity_a, lever_a);
+        let (arm_a, arm_b) = (radius_a - 0.5 * penetration, radius_b - 0.5 * penetration);
+        let lever_a = normal * arm_a;
+        let lever_b = normal * -arm_b;
+        // ω_B × l_B − ω_A × l_A with both levers along the normal: one cross product.
+        let v_rel = relative_velocity
+            - V::angular_cross(
+                angular_velocity_a * arm_a + angular_velocity_b * arm_b,
+                normal,
+            );
         let v_t = v_rel - normal * v_rel.dot(normal);
         Self {
             normal,
@@ -235,8 +240,9 @@ pub trait ContactLaw: Sync + Send + std::fmt::Debug {
 }
 
 /// Carries the shear force with the contact frame: the minimal rotation from the previous
-/// normal to the new one, then the twist about the new normal, then a projection onto the new
-/// tangent plane (removes round-off only; the rotation is exact).
+/// normal to the new one, then the twist about the new normal; the result lies in the new
+/// tangent plane (exact rotations, written for a vector of the old tangent plane:
+/// [`SpaceVector::carry_tangential`]).
 #[inline]
 pub fn rotate_shear_force<V: SpaceVector>(
     shear_force: V,

@@ -38,7 +38,8 @@ pub enum DemError {
         /// The number of particles.
         expected: usize,
     },
-    /// A contact or bond names a particle that does not exist, or a particle twice.
+    /// A contact or bond names a particle that does not exist, or a particle twice, or a
+    /// contact list is not sorted by pair.
     #[error("contact {index}: particles ({a}, {b}) invalid for {particle_count} particles")]
     InvalidContact {
         /// Contact index.

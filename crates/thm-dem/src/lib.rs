@@ -92,10 +92,11 @@
 //! Small overlaps (`U/R` ≲ 0.1 at contacts that were never bonded), quasi-static or moderately
 //! dynamic loading, `Δt` below [`critical_time_step`]. Linear contact springs (no Hertz).
 //!
-//! In 2D the shear force is carried from the old tangent to the new one directly (its
-//! component along the old tangent `(−n_y, n_x)` is put on the new tangent); this equals the
-//! 3D rotation-and-projection to round-off (property test in [`vector`]). The twist about the
-//! normal is zero for disks.
+//! In 3D the shear force (a vector of the old tangent plane) is carried by the exact minimal
+//! rotation `F − (n·F)/(1 + n₀·n) (n₀ + n)` and the exact twist about the new normal; in 2D
+//! its component along the old tangent `(−n_y, n_x)` is put on the new tangent. Both equal
+//! the general rotation followed by a projection to round-off (property tests in [`vector`]).
+//! The twist about the normal is zero for disks.
 //!
 //! Input ranges are checked by [`validate`] (a structured [`OutOfRange`] that this crate's
 //! [`DemError`] and the crates built on it wrap).
@@ -106,11 +107,13 @@
 //! events) is owned by the caller and round-trips through serde bit for bit; parameters are
 //! serde structs validated once ([`StepperParams`], [`CohesiveFrictionalParams`],
 //! [`LinearSpringParams`]); the [`Stepper`] holds only scratch buffers. A step is a fixed
-//! sequence of stages (neighbour update, contact forces, events, gather, integrate) each public
-//! and testable. Contacts are computed in parallel (rayon), each writing only its own entry;
-//! each particle then sums its own contacts in contact-index order, so 1 and 2 threads give
-//! identical bits. Neighbour search is an O(N) cell grid with a Verlet skin. Once the contact
-//! lists are warm a step does not allocate. Unstable runs stop with
+//! sequence of stages (neighbour update, contact forces, events, gather with integration).
+//! Contacts are computed in parallel (rayon), each writing only its own entry; each particle
+//! then sums its own contacts in contact-index order, so 1 and 2 threads give identical bits.
+//! Neighbour search is an O(N) cell grid with a Verlet skin; a listed pair found apart is not
+//! looked at again until the particles' drift could have closed its gap, so the skin changes
+//! the cost, never the result (a test compares the bits of a wide and a thin skin). Once the
+//! contact lists are warm a step does not allocate. Unstable runs stop with
 //! [`DemError::NonFinite`] naming the particle and the step.
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]

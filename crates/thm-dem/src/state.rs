@@ -334,7 +334,8 @@ impl ParticleState {
 /// A list of contacts sorted by pair, with history and the last step's response.
 ///
 /// For particle–particle contacts a pair is `[a, b]` with `a < b`; for particle–wall contacts
-/// it is `[particle, wall]`.
+/// it is `[particle, wall]`. The stepper checks the order (a particle's contacts as `a` are
+/// then one range) and rejects an unsorted list with [`DemError::InvalidContact`].
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct ContactList {
     /// Pairs, sorted lexicographically.
@@ -468,7 +469,9 @@ pub struct DemState {
     /// Wall points at the last neighbour search.
     pub search_reference_wall_point: Vec<Vec3>,
     /// Incremented whenever the contact lists change membership (a stepper rebuilds its
-    /// per-particle contact index when it sees a new value).
+    /// per-particle contact index when it sees a new value). A caller that edits the
+    /// `reference_penetration` or the shear force of a contact that is not bonded and does not
+    /// touch increments it too, so that the stepper looks at every listed pair again.
     pub contact_generation: u64,
 }
 

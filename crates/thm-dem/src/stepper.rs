@@ -1,17 +1,22 @@
-//! The time step: a fixed sequence of named stages over caller-owned state.
+//! The time step: a fixed sequence of stages over caller-owned state.
 //!
-//! 1. [`Stepper::update_neighbours`]: Verlet-list check; cell-grid search and merge of the
-//!    contact histories when a particle (or wall) moved more than half the skin;
-//! 2. [`Stepper::compute_contact_forces`]: every contact in parallel, each writing only its own
-//!    history and response, reading the particles from one compact record each (copied in
-//!    parallel at the start of the stage); reports whether a bond broke (a boolean OR);
-//! 3. [`Stepper::collect_events`]: broken-bond events (the contacts are scanned only when a
-//!    bond broke) and wall forces, serially in contact order;
-//! 4. [`Stepper::gather_forces`]: every particle sums its own contacts in contact-index order,
-//!    plus external force and gravity (no atomics: the same bits for any thread count);
-//! 5. [`Stepper::integrate`]: Cundall's non-viscous damping (A-Eq. 7) and leapfrog, with the
-//!    finiteness check in the same pass (the first bad particle is a minimum over indices);
-//! 6. walls move at their prescribed velocity.
+//! 1. neighbours: how far the particles moved since the last search (two bounds, one pass);
+//!    cell-grid search and merge of the contact histories when a particle (or wall) moved
+//!    more than half the skin; the per-particle contact index when the lists changed;
+//! 2. contact forces: every contact in parallel, each writing only its own history, response
+//!    and "carried force" flag; a listed pair that does not touch (and is neither bonded nor
+//!    sheared) costs one distance, and is not looked at again until the drift since then
+//!    could have closed its gap; reports whether a bond broke (a boolean OR);
+//! 3. events: broken-bond events (the contacts are scanned only when a bond broke) and wall
+//!    forces, serially in contact order; when at most a quarter of the contacts carried
+//!    force, the particles that have one are marked;
+//! 4. gather and integrate, one pass over the particles: every particle sums its own contacts
+//!    in contact-index order (those that carried force; none for an unmarked particle when
+//!    particles were marked), plus external force and gravity (no
+//!    atomics: the same bits for any thread count), then Cundall's non-viscous damping
+//!    (A-Eq. 7) and leapfrog, with the finiteness check (the first bad particle is a minimum
+//!    over indices);
+//! 5. walls move at their prescribed velocity.
 
 use crate::contact::{
     BondState, ContactHistory, ContactKinematics, ContactLaw, ContactResponse, PairInput,
@@ -76,7 +81,7 @@ impl StepperConfig {
 }
 
 /// Advances a [`DemState`] with a contact law. Holds only scratch buffers (neighbour grid,
-/// per-particle contact index), so one stepper can advance any state.
+/// per-particle contact index, particle records), so one stepper can advance any state.
 #[derive(Debug)]
 pub struct Stepper<L: ContactLaw> {
     law: L,
@@ -84,27 +89,43 @@ pub struct Stepper<L: ContactLaw> {
     grid: CellGrid,
     candidates: Vec<[u32; 2]>,
     merged: ContactList,
-    /// `csr_start[i]..csr_start[i+1]` indexes `csr_entry` for particle `i`; an entry is
-    /// `contact << 1 | is_b`.
-    csr_start: Vec<u32>,
-    csr_entry: Vec<u32>,
-    wall_csr_start: Vec<u32>,
-    wall_csr_entry: Vec<u32>,
-    csr_cursor: Vec<u32>,
-    csr_key: Option<(u64, usize, usize, usize)>,
-    record: Vec<ParticleRecord>,
+    /// Contacts with `pair[0] == i` are `a_start[i]..a_start[i+1]` (the list is sorted).
+    a_start: Vec<u32>,
+    /// Contacts with `pair[1] == i` are `b_entry[b_start[i]..b_start[i+1]]`, ascending.
+    b_start: Vec<u32>,
+    b_entry: Vec<u32>,
+    /// Wall contacts of particle `i` are `wall_start[i]..wall_start[i+1]` (sorted list).
+    wall_start: Vec<u32>,
+    cursor: Vec<u32>,
+    index_key: Option<(u64, usize, usize, usize)>,
+    /// Whether each contact carried force in this step: the gather skips the others, whose
+    /// force and torques are zero.
+    active: Vec<u8>,
+    wall_active: Vec<u8>,
+    /// `touched[i] == stamp` when particle `i` has a contact that carried force in this step
+    /// (kept only when few contacts did: the gather then skips the other particles).
+    touched: Vec<u32>,
+    stamp: u32,
+    /// A listed pair found apart (and unbonded, without shear) stays apart while the drift
+    /// (see [`Drift`]) is below its entry: it is not looked at again until then.
+    quiet_below: Vec<f64>,
 }
 
-/// What a contact reads of a particle, in one record: two cache lines per particle of a pair
-/// instead of one line in each of five arrays.
-#[derive(Debug, Clone, Copy, Default)]
-struct ParticleRecord {
-    position: Vec3,
-    velocity: Vec3,
-    angular_velocity: Vec3,
-    radius: f64,
-    temperature: f64,
+/// How far the particles moved since the last neighbour search, as two bounds.
+#[derive(Debug, Clone, Copy)]
+struct Drift {
+    /// `max_i |x_i − x_i⁰| + max_i max(R_i − R_i⁰, 0)`: the Verlet criterion (no pair farther
+    /// than `R_a + R_b + skin` at the search can have come into contact while this is below
+    /// half the skin).
+    verlet: f64,
+    /// `D = max_i |x_i − x_i⁰| + max_i |R_i − R_i⁰|`: from step t₀ to step t the gap of a pair
+    /// closes by at most `2 (D(t) + D(t₀))`.
+    pair: f64,
 }
+
+/// Particles per block of the per-particle passes: blocks are fixed by the index, not by the
+/// thread count, and each is a plain loop over sub-slices (no per-element bounds checks).
+const BLOCK: usize = 512;
 
 impl<L: ContactLaw> Stepper<L> {
     /// A stepper with empty scratch buffers.
@@ -115,13 +136,17 @@ impl<L: ContactLaw> Stepper<L> {
             grid: CellGrid::default(),
             candidates: Vec::new(),
             merged: ContactList::default(),
-            csr_start: Vec::new(),
-            csr_entry: Vec::new(),
-            wall_csr_start: Vec::new(),
-            wall_csr_entry: Vec::new(),
-            csr_cursor: Vec::new(),
-            csr_key: None,
-            record: Vec::new(),
+            a_start: Vec::new(),
+            b_start: Vec::new(),
+            b_entry: Vec::new(),
+            wall_start: Vec::new(),
+            cursor: Vec::new(),
+            index_key: None,
+            active: Vec::new(),
+            wall_active: Vec::new(),
+            touched: Vec::new(),
+            stamp: 0,
+            quiet_below: Vec::new(),
         }
     }
 
@@ -143,11 +168,11 @@ impl<L: ContactLaw> Stepper<L> {
 
     /// One time step. Runs in the current rayon pool; the result does not depend on its size.
     pub fn step(&mut self, state: &mut DemState) -> Result<(), DemError> {
-        self.update_neighbours(state)?;
-        let any_broke = self.compute_contact_forces(state);
+        let drift = self.update_neighbours(state)?;
+        let (any_broke, active_count) = self.compute_contact_forces(state, drift);
         self.collect_events(state, any_broke);
-        self.gather_forces(state);
-        self.integrate(state)?;
+        let sparse = self.mark_touched(state, active_count);
+        self.gather_and_integrate(state, sparse)?;
         let dt = self.config.params.time_step;
         for w in &mut state.walls {
             w.point += w.velocity * dt;
@@ -165,79 +190,39 @@ impl<L: ContactLaw> Stepper<L> {
         Ok(())
     }
 
-    /// Stage 1: rebuilds the contact lists when the Verlet criterion asks for it, and the
-    /// per-particle contact index when the lists changed.
-    pub fn update_neighbours(&mut self, state: &mut DemState) -> Result<(), DemError> {
-        if self.needs_search(state) {
-            state.validate()?;
-            self.search(state);
-        }
-        let key = (
-            state.contact_generation,
-            state.contacts.len(),
-            state.wall_contacts.len(),
-            state.particles.len(),
-        );
-        if self.csr_key != Some(key) {
-            state.validate()?;
-            let n = state.particles.len();
-            let cursor = &mut self.csr_cursor;
-            build_csr(
-                n,
-                &state.contacts.pair,
-                true,
-                &mut self.csr_start,
-                &mut self.csr_entry,
-                cursor,
-            );
-            build_csr(
-                n,
-                &state.wall_contacts.pair,
-                false,
-                &mut self.wall_csr_start,
-                &mut self.wall_csr_entry,
-                cursor,
-            );
-            self.csr_key = Some(key);
-        }
-        Ok(())
-    }
-
-    fn needs_search(&self, state: &DemState) -> bool {
-        let p = &state.particles;
-        if state.search_reference_position.len() != p.len()
-            || state.search_reference_radius.len() != p.len()
-            || state.search_reference_wall_point.len() != state.walls.len()
-        {
-            return true;
-        }
+    /// Stage 1: measures how far the particles moved since the last search; rebuilds the
+    /// contact lists when the Verlet criterion asks for it, and the per-particle contact index
+    /// when the lists changed. Returns the pair drift `D` since the (possibly new) search.
+    fn update_neighbours(&mut self, state: &mut DemState) -> Result<f64, DemError> {
+        let mut drift = measure_drift(state);
         let half_skin = 0.5 * self.config.params.verlet_skin;
-        let displacement = |((x, x0), (r, r0)): ((&Vec3, &Vec3), (&f64, &f64))| {
-            (*x - *x0).norm() + (r - r0).max(0.0)
-        };
-        let particle_max = if p.len() >= PAR_THRESHOLD {
-            p.position
-                .par_iter()
-                .zip(&state.search_reference_position)
-                .zip(p.radius.par_iter().zip(&state.search_reference_radius))
-                .with_min_len(MIN_PAR_LEN)
-                .map(displacement)
-                .reduce(|| 0.0, f64::max)
-        } else {
-            p.position
-                .iter()
-                .zip(&state.search_reference_position)
-                .zip(p.radius.iter().zip(&state.search_reference_radius))
-                .map(displacement)
-                .fold(0.0, f64::max)
-        };
         let wall_max = state
             .walls
             .iter()
             .zip(&state.search_reference_wall_point)
             .map(|(w, p0)| (w.point - *p0).norm())
             .fold(0.0, f64::max);
-        particle_max + wall_max > half_skin || !particle_max.is_finite()
+        let n = state.particles.len();
+        let stale = state.search_reference_position.len() != n
+            || state.search_reference_radius.len() != n
+            || state.search_reference_wall_point.len() != state.walls.len();
+        if stale || drift.verlet + wall_max > half_skin || !drift.verlet.is_finite() {
+            state.validate()?;
+            self.search(state);
+            drift.pair = 0.0;
+        }
+        let key = (
+            state.contact_generation,
+            state.contacts.len(),
+            state.wall_contacts.len(),
+            n,
+        );
+        if self.index_key != Some(key) {
+            state.validate()?;
+            self.build_index(state)?;
+            self.index_key = Some(key);
+        }
+        Ok(drift.pair)
     }
 
     fn search(&mut self, state: &mut DemState) {
@@ -256,6 +241,9 @@ impl<L: ContactLaw> Stepper<L> {
         reserve_to(&mut state.contacts.pair, headroom);
         reserve_to(&mut state.contacts.history, headroom);
         reserve_to(&mut state.contacts.response, headroom);
+        reserve_to(&mut self.active, headroom);
+        reserve_to(&mut self.quiet_below, headroom);
+        reserve_to(&mut self.b_entry, headroom);
 
         self.candidates.clear();
         let p = &state.particles;
@@ -268,6 +256,8 @@ impl<L: ContactLaw> Stepper<L> {
         }
         merge_contacts(&state.wall_contacts, &self.candidates, &mut self.merged);
         std::mem::swap(&mut state.wall_contacts, &mut self.merged);
+        let wall_headroom = state.wall_contacts.len() + state.wall_contacts.len() / 4 + 16;
+        reserve_to(&mut self.wall_active, wall_headroom);
 
         state.search_reference_position.clear();
         state
@@ -282,10 +272,54 @@ impl<L: ContactLaw> Stepper<L> {
         state.contact_generation += 1;
     }
 
+    /// The per-particle contact index; checks that both lists are sorted by pair (as
+    /// [`ContactList`] requires), which makes a particle's own contacts (as `a`, and its wall
+    /// contacts) contiguous ranges.
+    fn build_index(&mut self, state: &DemState) -> Result<(), DemError> {
+        let n = state.particles.len();
+        for list in [&state.contacts, &state.wall_contacts] {
+            if let Some(k) = (1..list.len()).find(|&k| list.pair[k - 1] >= list.pair[k]) {
+                return Err(DemError::InvalidContact {
+                    index: k,
+                    a: list.pair[k][0] as usize,
+                    b: list.pair[k][1] as usize,
+                    particle_count: n,
+                });
+            }
+        }
+        start_of_first(n, &state.contacts.pair, &mut self.a_start);
+        start_of_first(n, &state.wall_contacts.pair, &mut self.wall_start);
+        let (start, entry, cursor) = (&mut self.b_start, &mut self.b_entry, &mut self.cursor);
+        start.clear();
+        start.resize(n + 1, 0);
+        for p in &state.contacts.pair {
+            start[p[1] as usize + 1] += 1;
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        entry.clear();
+        entry.resize(start[n] as usize, 0);
+        cursor.clear();
+        cursor.extend_from_slice(&start[..n]);
+        for (k, p) in state.contacts.pair.iter().enumerate() {
+            let b = p[1] as usize;
+            entry[cursor[b] as usize] = k as u32;
+            cursor[b] += 1;
+        }
+        // Every pair is looked at in the next step.
+        self.quiet_below.clear();
+        self.quiet_below
+            .resize(state.contacts.len(), f64::NEG_INFINITY);
+        Ok(())
+    }
+
     /// Stage 2: forces of all particle–particle and particle–wall contacts, in parallel.
     /// Returns whether a bond broke in this step (an OR over contacts: the same for any
-    /// thread count), so that stage 3 scans the responses only then.
-    pub fn compute_contact_forces(&mut self, state: &mut DemState) -> bool {
+    /// thread count), so that stage 3 scans the responses only then, and how many
+    /// particle–particle contacts carried force. `drift` is the pair bound `D` of [`Drift`]
+    /// for this step.
+    fn compute_contact_forces(&mut self, state: &mut DemState, drift: f64) -> (bool, usize) {
         let dt = self.config.params.time_step;
         let law = &self.law;
         let DemState {
@@ -295,124 +329,226 @@ impl<L: ContactLaw> Stepper<L> {
             wall_contacts,
             ..
         } = state;
-        let p: &ParticleState = p;
-        let n = p.len();
-        self.record.clear();
-        self.record.resize(n, ParticleRecord::default());
-        let fill = |(i, rec): (usize, &mut ParticleRecord)| {
-            *rec = ParticleRecord {
-                position: p.position[i],
-                velocity: p.velocity[i],
-                angular_velocity: p.angular_velocity[i],
-                radius: p.radius[i],
-                temperature: p.temperature[i],
-            };
-        };
-        if n >= PAR_THRESHOLD {
-            self.record
-                .par_iter_mut()
-                .enumerate()
-                .with_min_len(MIN_PAR_LEN)
-                .for_each(fill);
-        } else {
-            self.record.iter_mut().enumerate().for_each(fill);
-        }
-        let rec: &[ParticleRecord] = &self.record;
-        let particle_contact =
-            |((h, r), pair): ((&mut ContactHistory, &mut ContactResponse), &[u32; 2])| {
-                let (pa, pb) = (&rec[pair[0] as usize], &rec[pair[1] as usize]);
-                let branch = pb.position - pa.position;
-                // Candidate pairs that do not touch (most of a Verlet list) cost one
-                // squared distance; their response is cleared only if it was not already.
-                if h.bond != BondState::Intact && h.shear_force == Vec3::ZERO {
-                    let reach = pa.radius + pb.radius - h.reference_penetration;
-                    if reach <= 0.0 || branch.norm_squared() >= reach * reach {
+        let (x, radius, v, w, t) = (
+            &p.position[..],
+            &p.radius[..],
+            &p.velocity[..],
+            &p.angular_velocity[..],
+            &p.temperature[..],
+        );
+        self.active.resize(contacts.len(), 0);
+        self.wall_active.resize(wall_contacts.len(), 0);
+        type Item<'a> = (
+            (
+                (
+                    (&'a mut ContactHistory, &'a mut ContactResponse),
+                    &'a mut u8,
+                ),
+                &'a mut f64,
+            ),
+            &'a [u32; 2],
+        );
+        let particle_contact = |((((h, r), active), quiet), pair): Item<'_>| {
+            // Proven apart since it was last looked at (below), and its history is still the
+            // cleared one (any evaluation sets the normal; a bond installed meanwhile or a
+            // restored state is seen at once).
+            if drift < *quiet && h.bond != BondState::Intact && is_zero(h.normal) {
+                *active = 0;
+                return 0;
+            }
+            let (a, b) = (pair[0] as usize, pair[1] as usize);
+            let (ra, rb) = (radius[a], radius[b]);
+            let branch = x[b] - x[a];
+            // A listed pair that neither touches nor is bonded nor carries shear costs one
+            // squared distance. Its history's normal doubles as the flag "response already
+            // cleared": every evaluation below sets it to a unit vector.
+            if h.bond != BondState::Intact && is_zero(h.shear_force) {
+                let reach = ra + rb - h.reference_penetration;
+                let d2 = branch.norm_squared();
+                if reach <= 0.0 || d2 >= reach * reach {
+                    if !is_zero(h.normal) {
                         h.normal = Vec3::ZERO;
-                        if r.active || r.broke.is_some() {
-                            *r = ContactResponse::default();
-                        }
-                        return false;
+                        *r = ContactResponse::default();
                     }
+                    // Its gap g closes by at most 2 (D(t) + D(t₀)) by step t: apart while
+                    // D(t) < g/2 − D(t₀) (less a margin far above the round-off of g and D).
+                    if reach > 0.0 {
+                        *quiet = 0.5 * (d2.sqrt() - reach - 1e-9 * reach) - drift;
+                    }
+                    *active = 0;
+                    return 0;
                 }
-                let kin = ContactKinematics::from_pair(
-                    branch,
-                    pb.velocity - pa.velocity,
-                    pa.angular_velocity,
-                    pb.angular_velocity,
-                    pa.radius,
-                    pb.radius,
-                    dt,
-                );
-                let input = PairInput {
-                    radius_a: pa.radius,
-                    radius_b: pb.radius,
-                    temperature: 0.5 * (pa.temperature + pb.temperature),
-                };
-                *r = law.respond(&input, &kin, h);
-                r.broke.is_some()
+            }
+            *quiet = f64::NEG_INFINITY;
+            let kin = ContactKinematics::from_pair(branch, v[b] - v[a], w[a], w[b], ra, rb, dt);
+            let input = PairInput {
+                radius_a: ra,
+                radius_b: rb,
+                temperature: 0.5 * (t[a] + t[b]),
             };
-        let any_broke = if contacts.len() >= PAR_THRESHOLD {
+            *r = law.respond(&input, &kin, h);
+            *active = u8::from(r.active);
+            // Bit 0: a bond broke; bit 1: the contact carried force.
+            u8::from(r.broke.is_some()) | (*active << 1)
+        };
+        // Blocks of contacts, each a plain loop (the per-item cost of rayon's adaptors is
+        // comparable to that of a listed pair that does not touch).
+        type Chunk<'a> = (
+            (
+                (
+                    (&'a mut [ContactHistory], &'a mut [ContactResponse]),
+                    &'a mut [u8],
+                ),
+                &'a mut [f64],
+            ),
+            &'a [[u32; 2]],
+        );
+        let chunk = |((((h, r), a), q), p): Chunk<'_>| {
+            h.iter_mut()
+                .zip(r.iter_mut())
+                .zip(a.iter_mut())
+                .zip(q.iter_mut())
+                .zip(p.iter())
+                .fold((false, 0), |(broke, count), item| {
+                    let bits = particle_contact(item);
+                    (broke | (bits & 1 != 0), count + usize::from(bits >> 1))
+                })
+        };
+        let (any_broke, active_count) = if contacts.len() >= PAR_THRESHOLD {
             contacts
                 .history
-                .par_iter_mut()
-                .zip(contacts.response.par_iter_mut())
-                .zip(contacts.pair.par_iter())
-                .with_min_len(MIN_PAR_LEN)
-                .map(particle_contact)
-                .reduce(|| false, |x, y| x | y)
+                .par_chunks_mut(MIN_PAR_LEN)
+                .zip(contacts.response.par_chunks_mut(MIN_PAR_LEN))
+                .zip(self.active.par_chunks_mut(MIN_PAR_LEN))
+                .zip(self.quiet_below.par_chunks_mut(MIN_PAR_LEN))
+                .zip(contacts.pair.par_chunks(MIN_PAR_LEN))
+                .map(chunk)
+                .reduce(|| (false, 0), |x, y| (x.0 | y.0, x.1 + y.1))
         } else {
-            contacts
-                .history
-                .iter_mut()
-                .zip(contacts.response.iter_mut())
-                .zip(contacts.pair.iter())
-                .map(particle_contact)
-                .fold(false, |x, y| x | y)
+            chunk((
+                (
+                    (
+                        (&mut contacts.history[..], &mut contacts.response[..]),
+                        &mut self.active[..],
+                    ),
+                    &mut self.quiet_below[..],
+                ),
+                &contacts.pair[..],
+            ))
         };
         let walls: &[crate::state::Wall] = walls;
-        let wall_contact =
-            |((h, r), pair): ((&mut ContactHistory, &mut ContactResponse), &[u32; 2])| {
-                let (a, w) = (pair[0] as usize, pair[1] as usize);
-                let wall = &walls[w];
-                let kin = ContactKinematics::from_wall(
-                    p.position[a],
-                    p.velocity[a],
-                    p.angular_velocity[a],
-                    p.radius[a],
-                    wall.point,
-                    wall.normal,
-                    wall.velocity,
-                    dt,
-                );
-                let input = PairInput {
-                    radius_a: p.radius[a],
-                    radius_b: p.radius[a],
-                    temperature: p.temperature[a],
-                };
-                *r = law.respond(&input, &kin, h);
+        type WallItem<'a> = (
+            (
+                (&'a mut ContactHistory, &'a mut ContactResponse),
+                &'a mut u8,
+            ),
+            &'a [u32; 2],
+        );
+        let wall_contact = |(((h, r), active), pair): WallItem<'_>| {
+            let (a, wall) = (pair[0] as usize, &walls[pair[1] as usize]);
+            let ra = radius[a];
+            // As for pairs: apart, unbonded and without shear costs one distance.
+            if h.bond != BondState::Intact && is_zero(h.shear_force) {
+                let gap = (x[a] - wall.point).dot(wall.normal);
+                if ra - gap - h.reference_penetration <= 0.0 {
+                    if !is_zero(h.normal) {
+                        h.normal = Vec3::ZERO;
+                        *r = ContactResponse::default();
+                    }
+                    *active = 0;
+                    return;
+                }
+            }
+            let kin = ContactKinematics::from_wall(
+                x[a],
+                v[a],
+                w[a],
+                ra,
+                wall.point,
+                wall.normal,
+                wall.velocity,
+                dt,
+            );
+            let input = PairInput {
+                radius_a: ra,
+                radius_b: ra,
+                temperature: t[a],
             };
+            *r = law.respond(&input, &kin, h);
+            *active = u8::from(r.active);
+        };
         if wall_contacts.len() >= PAR_THRESHOLD {
             wall_contacts
                 .history
-                .par_iter_mut()
-                .zip(wall_contacts.response.par_iter_mut())
-                .zip(wall_contacts.pair.par_iter())
-                .with_min_len(MIN_PAR_LEN)
-                .for_each(wall_contact);
+                .par_chunks_mut(MIN_PAR_LEN)
+                .zip(wall_contacts.response.par_chunks_mut(MIN_PAR_LEN))
+                .zip(self.wall_active.par_chunks_mut(MIN_PAR_LEN))
+                .zip(wall_contacts.pair.par_chunks(MIN_PAR_LEN))
+                .for_each(|(((h, r), a), p)| {
+                    h.iter_mut()
+                        .zip(r.iter_mut())
+                        .zip(a.iter_mut())
+                        .zip(p.iter())
+                        .for_each(wall_contact)
+                });
         } else {
             wall_contacts
                 .history
                 .iter_mut()
                 .zip(wall_contacts.response.iter_mut())
+                .zip(self.wall_active.iter_mut())
                 .zip(wall_contacts.pair.iter())
                 .for_each(wall_contact);
         }
-        any_broke
+        (any_broke, active_count)
+    }
+
+    /// When at most a quarter of the particle–particle contacts carried force, stamps the
+    /// particles that have one (a serial scan of the flags, eight at a time) so that the
+    /// gather skips the others; returns whether it did. Skipping changes no bit: those
+    /// particles would add only zeros.
+    fn mark_touched(&mut self, state: &DemState, active_count: usize) -> bool {
+        if active_count.saturating_mul(4) > state.contacts.len() {
+            return false;
+        }
+        let n = state.particles.len();
+        if self.touched.len() != n {
+            self.touched.clear();
+            self.touched.resize(n, 0);
+        }
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.touched.fill(0);
+            self.stamp = 1;
+        }
+        let (touched, stamp) = (&mut self.touched[..], self.stamp);
+        for (flags, pairs, both) in [
+            (&self.active[..], &state.contacts.pair[..], true),
+            (&self.wall_active[..], &state.wall_contacts.pair[..], false),
+        ] {
+            for (word, pairs) in flags.chunks(8).zip(pairs.chunks(8)) {
+                let any = match <[u8; 8]>::try_from(word) {
+                    Ok(w) => u64::from_le_bytes(w) != 0,
+                    Err(_) => word.iter().any(|&f| f != 0),
+                };
+                if any {
+                    for (&f, p) in word.iter().zip(pairs) {
+                        if f != 0 {
+                            touched[p[0] as usize] = stamp;
+                            if both {
+                                touched[p[1] as usize] = stamp;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        true
     }
 
     /// Stage 3: broken-bond events (in contact order; the contacts are scanned only when
     /// stage 2 reported a break) and the forces on the walls.
-    pub fn collect_events(&self, state: &mut DemState, any_broke: bool) {
+    fn collect_events(&self, state: &mut DemState, any_broke: bool) {
         if any_broke {
             for (pair, r) in state.contacts.pair.iter().zip(&state.contacts.response) {
                 if let Some(mode) = r.broke {
@@ -438,71 +574,24 @@ impl<L: ContactLaw> Stepper<L> {
         }
     }
 
-    /// Stage 4: resultant force and torque per particle, summed in contact-index order.
-    pub fn gather_forces(&self, state: &mut DemState) {
+    /// Stages 4 and 5 in one pass over the particles: each sums its own contacts in
+    /// contact-index order (as `b`, then as `a`, then its walls; contacts that carried no
+    /// force are skipped, adding their zeros would not change a bit), plus external force and
+    /// gravity; then Cundall's non-viscous damping (A-Eq. 7) and the leapfrog update, with the
+    /// finiteness check (the first bad particle is a minimum over indices). Fixed particles
+    /// move at their prescribed velocity; plane kinematics keep `z = 0`, `v_z = 0`,
+    /// `ω_x = ω_y = 0`.
+    fn gather_and_integrate(&self, state: &mut DemState, sparse: bool) -> Result<(), DemError> {
         let g = self.config.gravity;
+        let dt = self.config.params.time_step;
+        let alpha = self.config.params.damping;
+        let step = state.step;
         let DemState {
             particles,
             contacts,
             wall_contacts,
             ..
         } = state;
-        let ParticleState {
-            force,
-            torque,
-            external_force,
-            external_torque,
-            mass,
-            ..
-        } = particles;
-        let (cs, ce) = (&self.csr_start, &self.csr_entry);
-        let (ws, we) = (&self.wall_csr_start, &self.wall_csr_entry);
-        let resp = &contacts.response;
-        let wresp = &wall_contacts.response;
-        let n = force.len();
-        let gather = |(i, (f, t)): (usize, (&mut Vec3, &mut Vec3))| {
-            let mut fi = Vec3::ZERO;
-            let mut ti = Vec3::ZERO;
-            for &e in &ce[cs[i] as usize..cs[i + 1] as usize] {
-                let r = &resp[(e >> 1) as usize];
-                if e & 1 == 1 {
-                    fi += r.force_on_b;
-                    ti += r.torque_on_b;
-                } else {
-                    fi -= r.force_on_b;
-                    ti += r.torque_on_a;
-                }
-            }
-            for &e in &we[ws[i] as usize..ws[i + 1] as usize] {
-                let r = &wresp[(e >> 1) as usize];
-                fi -= r.force_on_b;
-                ti += r.torque_on_a;
-            }
-            *f = fi + external_force[i] + g * mass[i];
-            *t = ti + external_torque[i];
-        };
-        if n >= PAR_THRESHOLD {
-            force
-                .par_iter_mut()
-                .zip(torque.par_iter_mut())
-                .enumerate()
-                .with_min_len(MIN_PAR_LEN)
-                .for_each(gather);
-        } else {
-            force
-                .iter_mut()
-                .zip(torque.iter_mut())
-                .enumerate()
-                .for_each(gather);
-        }
-    }
-
-    /// Stage 5: damping (A-Eq. 7) and leapfrog update; fixed particles move at their
-    /// prescribed velocity; plane kinematics keep `z = 0`, `v_z = 0`, `ω_x = ω_y = 0`.
-    pub fn integrate(&self, state: &mut DemState) -> Result<(), DemError> {
-        let dt = self.config.params.time_step;
-        let alpha = self.config.params.damping;
-        let step = state.step;
         let ParticleState {
             kinematics,
             position,
@@ -511,52 +600,127 @@ impl<L: ContactLaw> Stepper<L> {
             mass,
             inertia,
             fixed,
+            external_force,
+            external_torque,
             force,
             torque,
             ..
-        } = &mut state.particles;
+        } = particles;
         let planar = kinematics.is_planar();
         let n = position.len();
-        // Advances particle `i`; returns `i` when its state became non-finite, else `usize::MAX`,
-        // so the first bad particle is the minimum (the same for any thread count).
-        let advance = |(i, ((x, v), w)): (usize, ((&mut Vec3, &mut Vec3), &mut Vec3))| {
-            if !fixed[i] {
-                let inv_m = 1.0 / mass[i];
-                let inv_i = 1.0 / inertia[i];
-                let f = cundall_damping(force[i], *v, dt * inv_m, alpha);
-                let t = cundall_damping(torque[i], *w, dt * inv_i, alpha);
-                *v += f * (dt * inv_m);
-                *w += t * (dt * inv_i);
-                if planar {
-                    v.z = 0.0;
-                    w.x = 0.0;
-                    w.y = 0.0;
+        let (resp, active) = (&contacts.response[..], &self.active[..]);
+        let (wresp, wactive) = (&wall_contacts.response[..], &self.wall_active[..]);
+        let (a_start, b_start, b_entry) = (&self.a_start[..], &self.b_start[..], &self.b_entry);
+        let wall_start = &self.wall_start[..];
+        let (touched, stamp) = (&self.touched[..], self.stamp);
+        type Block<'a> = (
+            usize,
+            (
+                (
+                    ((&'a mut [Vec3], &'a mut [Vec3]), &'a mut [Vec3]),
+                    &'a mut [Vec3],
+                ),
+                &'a mut [Vec3],
+            ),
+        );
+        // Returns the first particle of the block whose state became non-finite, else
+        // `usize::MAX`.
+        let block = |(c, ((((xs, vs), ws), fs), ts)): Block<'_>| -> usize {
+            let s = c * BLOCK;
+            let e = s + xs.len();
+            let mut first_bad = usize::MAX;
+            let ranges = b_start[s..=e]
+                .windows(2)
+                .zip(a_start[s..=e].windows(2))
+                .zip(wall_start[s..=e].windows(2));
+            let loads = fixed[s..e]
+                .iter()
+                .zip(external_force[s..e].iter().zip(&external_torque[s..e]));
+            for (
+                j,
+                (
+                    ((((((x, v), w), f_out), t_out), (&m, &inertia)), (&fixed, (fe, te))),
+                    ((b_range, a_range), w_range),
+                ),
+            ) in xs
+                .iter_mut()
+                .zip(vs.iter_mut())
+                .zip(ws.iter_mut())
+                .zip(fs.iter_mut())
+                .zip(ts.iter_mut())
+                .zip(mass[s..e].iter().zip(&inertia[s..e]))
+                .zip(loads)
+                .zip(ranges)
+                .enumerate()
+            {
+                let i = s + j;
+                let mut fi = Vec3::ZERO;
+                let mut ti = Vec3::ZERO;
+                if !(sparse && touched[i] != stamp) {
+                    for &k in &b_entry[b_range[0] as usize..b_range[1] as usize] {
+                        let k = k as usize;
+                        if active[k] != 0 {
+                            fi += resp[k].force_on_b;
+                            ti += resp[k].torque_on_b;
+                        }
+                    }
+                    let own = a_range[0] as usize..a_range[1] as usize;
+                    for (r, &on) in resp[own.clone()].iter().zip(&active[own]) {
+                        if on != 0 {
+                            fi -= r.force_on_b;
+                            ti += r.torque_on_a;
+                        }
+                    }
+                    let own = w_range[0] as usize..w_range[1] as usize;
+                    for (r, &on) in wresp[own.clone()].iter().zip(&wactive[own]) {
+                        if on != 0 {
+                            fi -= r.force_on_b;
+                            ti += r.torque_on_a;
+                        }
+                    }
+                }
+                *f_out = fi + *fe + g * m;
+                *t_out = ti + *te;
+                if !fixed {
+                    let inv_m = 1.0 / m;
+                    let inv_i = 1.0 / inertia;
+                    let f = cundall_damping(*f_out, *v, dt * inv_m, alpha);
+                    let t = cundall_damping(*t_out, *w, dt * inv_i, alpha);
+                    *v += f * (dt * inv_m);
+                    *w += t * (dt * inv_i);
+                    if planar {
+                        v.z = 0.0;
+                        w.x = 0.0;
+                        w.y = 0.0;
+                    }
+                }
+                *x += *v * dt;
+                if !all_finite(*x, *v, *w) {
+                    first_bad = first_bad.min(i);
                 }
             }
-            *x += *v * dt;
-            if x.is_finite() && v.is_finite() && w.is_finite() {
-                usize::MAX
-            } else {
-                i
-            }
+            first_bad
         };
         let first_bad = if n >= PAR_THRESHOLD {
             position
-                .par_iter_mut()
-                .zip(velocity.par_iter_mut())
-                .zip(angular_velocity.par_iter_mut())
+                .par_chunks_mut(BLOCK)
+                .zip(velocity.par_chunks_mut(BLOCK))
+                .zip(angular_velocity.par_chunks_mut(BLOCK))
+                .zip(force.par_chunks_mut(BLOCK))
+                .zip(torque.par_chunks_mut(BLOCK))
                 .enumerate()
-                .with_min_len(MIN_PAR_LEN)
-                .map(advance)
+                .map(block)
                 .min()
                 .unwrap_or(usize::MAX)
         } else {
             position
-                .iter_mut()
-                .zip(velocity.iter_mut())
-                .zip(angular_velocity.iter_mut())
+                .chunks_mut(BLOCK)
+                .zip(velocity.chunks_mut(BLOCK))
+                .zip(angular_velocity.chunks_mut(BLOCK))
+                .zip(force.chunks_mut(BLOCK))
+                .zip(torque.chunks_mut(BLOCK))
                 .enumerate()
-                .map(advance)
+                .map(block)
                 .min()
                 .unwrap_or(usize::MAX)
         };
@@ -569,6 +733,84 @@ impl<L: ContactLaw> Stepper<L> {
             }),
             None => Ok(()),
         }
+    }
+}
+
+/// True when all nine components are finite. A NaN or an infinity makes their sum
+/// non-finite; a finite sum proves them finite (the one-by-one test runs only when the sum
+/// overflowed or a component is not finite).
+#[inline]
+fn all_finite(a: Vec3, b: Vec3, c: Vec3) -> bool {
+    let s = a + b + c;
+    (s.x + s.y + s.z).is_finite() || (a.is_finite() && b.is_finite() && c.is_finite())
+}
+
+/// True when all components are +0.0 (a cleared vector; a −0.0 takes the general path).
+#[inline]
+fn is_zero(v: Vec3) -> bool {
+    (v.x.to_bits() | v.y.to_bits() | v.z.to_bits()) == 0
+}
+
+/// The two drift bounds of [`Drift`] (zero when there is no reference yet: the caller
+/// searches then anyway).
+fn measure_drift(state: &DemState) -> Drift {
+    let p = &state.particles;
+    let n = p.len();
+    let (x0, r0) = (
+        &state.search_reference_position,
+        &state.search_reference_radius,
+    );
+    if x0.len() != n || r0.len() != n {
+        return Drift {
+            verlet: 0.0,
+            pair: 0.0,
+        };
+    }
+    // Per block: max |Δx|², max ΔR, max −ΔR.
+    let block = |c: usize| -> [f64; 3] {
+        let s = c * BLOCK;
+        let e = (s + BLOCK).min(n);
+        let mut m = [0.0_f64; 3];
+        for ((x, x0), (r, r0)) in p.position[s..e]
+            .iter()
+            .zip(&x0[s..e])
+            .zip(p.radius[s..e].iter().zip(&r0[s..e]))
+        {
+            // Plain comparisons (`maxsd`); `f64::max` would also sort out NaNs, which the
+            // finiteness checks of the integration and of the search report anyway.
+            let (d2, dr) = ((*x - *x0).norm_squared(), r - r0);
+            m[0] = if d2 > m[0] { d2 } else { m[0] };
+            m[1] = if dr > m[1] { dr } else { m[1] };
+            m[2] = if -dr > m[2] { -dr } else { m[2] };
+        }
+        m
+    };
+    let max3 = |a: [f64; 3], b: [f64; 3]| [a[0].max(b[0]), a[1].max(b[1]), a[2].max(b[2])];
+    let blocks = n.div_ceil(BLOCK);
+    let m = if n >= PAR_THRESHOLD {
+        (0..blocks)
+            .into_par_iter()
+            .map(block)
+            .reduce(|| [0.0; 3], max3)
+    } else {
+        (0..blocks).map(block).fold([0.0; 3], max3)
+    };
+    let dx = m[0].sqrt();
+    Drift {
+        verlet: dx + m[1],
+        pair: dx + m[1].max(m[2]),
+    }
+}
+
+/// `start[i]..start[i+1]` are the entries of a sorted pair list whose first index is `i`.
+fn start_of_first(n: usize, pairs: &[[u32; 2]], start: &mut Vec<u32>) {
+    start.clear();
+    start.resize(n + 1, 0);
+    for p in pairs {
+        start[p[0] as usize + 1] += 1;
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
     }
 }
 
@@ -628,43 +870,6 @@ fn merge_contacts(old: &ContactList, candidates: &[[u32; 2]], out: &mut ContactL
             out.response.push(old.response[k]);
         }
         k += 1;
-    }
-}
-
-/// Per-particle contact index in compressed rows, each row in ascending contact order.
-fn build_csr(
-    n: usize,
-    pairs: &[[u32; 2]],
-    both: bool,
-    start: &mut Vec<u32>,
-    entry: &mut Vec<u32>,
-    cursor: &mut Vec<u32>,
-) {
-    start.clear();
-    start.resize(n + 1, 0);
-    for p in pairs {
-        start[p[0] as usize + 1] += 1;
-        if both {
-            start[p[1] as usize + 1] += 1;
-        }
-    }
-    for i in 0..n {
-        start[i + 1] += start[i];
-    }
-    entry.clear();
-    entry.resize(start[n] as usize, 0);
-    cursor.clear();
-    cursor.extend_from_slice(&start[..n]);
-    for (k, p) in pairs.iter().enumerate() {
-        let k = k as u32;
-        let a = p[0] as usize;
-        entry[cursor[a] as usize] = k << 1;
-        cursor[a] += 1;
-        if both {
-            let b = p[1] as usize;
-            entry[cursor[b] as usize] = (k << 1) | 1;
-            cursor[b] += 1;
-        }
     }
 }
 

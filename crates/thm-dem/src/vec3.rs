@@ -174,18 +174,23 @@ pub fn rotate_about(v: Vec3, axis: Vec3, angle: f64) -> Vec3 {
     if angle == 0.0 {
         return v;
     }
-    // Contact frames turn by far less than a milliradian per step: there the Taylor series
-    // (truncation below 1e-17 relative) replaces the costlier sin_cos.
+    let (s, c) = sin_cos(angle);
+    v * c + axis.cross(v) * s + axis * (axis.dot(v) * (1.0 - c))
+}
+
+/// `(sin, cos)` of an angle. Contact frames turn by far less than a milliradian per step:
+/// there the Taylor series (truncation below 1e-17 relative) replaces the costlier `sin_cos`.
+#[inline]
+pub(crate) fn sin_cos(angle: f64) -> (f64, f64) {
     let a2 = angle * angle;
-    let (s, c) = if angle.abs() < 1e-3 {
+    if angle.abs() < 1e-3 {
         (
             angle * (1.0 - a2 / 6.0 * (1.0 - a2 / 20.0)),
             1.0 - a2 / 2.0 * (1.0 - a2 / 12.0),
         )
     } else {
         angle.sin_cos()
-    };
-    v * c + axis.cross(v) * s + axis * (axis.dot(v) * (1.0 - c))
+    }
 }
 
 #[cfg(test)]

@@ -484,3 +484,106 @@ fn friction_work_equals_the_kinetic_energy_lost_by_a_sliding_disk() {
     );
     assert!(work > 100.0 * elastic_bound);
 }
+
+/// The Verlet skin decides which pairs are listed and how often the list is rebuilt, never
+/// the result: a lattice shaken hard enough that contacts open and close, under gravity on a
+/// floor, with radii that grow and shrink (thermal expansion), gives the same bits with a
+/// wide skin (few searches; listed pairs found apart are not looked at again until the drift
+/// could have closed their gap; so few listed pairs carry force that the gather visits only
+/// the particles that have one) as with a skin so thin that the list is rebuilt nearly every
+/// step (and nearly every listed pair carries force).
+#[test]
+fn verlet_skin_and_skipped_pairs_do_not_change_a_bit() {
+    let run = |skin: f64| -> DemState {
+        let p = jittered_lattice(Kinematics::Spheres3d, 8, 8, 8, 5, 0.3);
+        let floor = Wall::new(Vec3::new(0.0, 0.0, -6e-4), Vec3::new(0.0, 0.0, 1.0)).unwrap();
+        let mut state = DemState::new(p, vec![floor]);
+        let law = LinearSpringParams {
+            normal_stiffness: 2e4,
+            tangential_stiffness: 1e4,
+            friction_coefficient: 0.4,
+            thermal_bond: None,
+        }
+        .validate()
+        .unwrap();
+        let dt = 0.2 * critical_time_step(&state, &law);
+        let mut params = stepper_params(dt, 0.05);
+        params.gravity = [0.0, 0.0, -9.81e3];
+        params.verlet_skin = skin;
+        let mut stepper = Stepper::new(law, params.validate().unwrap());
+        let t0 = state.particles.temperature[0];
+        for (k, rise) in [40.0, -30.0, 10.0, 0.0].into_iter().enumerate() {
+            stepper.run(&mut state, 150).unwrap();
+            let t = vec![t0 + rise; state.particles.len()];
+            state.particles.expand_from_reference(1e-4, t0, &t).unwrap();
+            if k == 0 {
+                assert!(state.contacts.active_count() > 100);
+            }
+        }
+        state
+    };
+    let wide = run(3e-4);
+    let thin = run(1e-9);
+    // The wide list holds many pairs that do not touch; the thin one was rebuilt often.
+    // The wide list holds many pairs that do not touch (so few carry force that the gather
+    // skips the particles without one); the thin one holds little else and was rebuilt often.
+    let (wide_active, thin_active) = (wide.contacts.active_count(), thin.contacts.active_count());
+    assert!(wide.contacts.len() > 8 * wide_active && thin.contacts.len() < 4 * thin_active);
+    assert!(wide.contact_generation < 60 && thin.contact_generation > 300);
+    let bits = |s: &DemState| -> Vec<u64> {
+        let p = &s.particles;
+        p.position
+            .iter()
+            .chain(&p.velocity)
+            .chain(&p.angular_velocity)
+            .chain(&p.force)
+            .flat_map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
+            .collect()
+    };
+    assert_eq!(bits(&wide), bits(&thin));
+}
+
+/// A stepper holds only scratch: taking a saved state back (same contact generation, so the
+/// stepper keeps its index and its record of pairs found apart, made on the states after the
+/// saved one) and stepping on gives the bits of a fresh stepper.
+#[test]
+fn a_stepper_carries_nothing_from_one_state_to_another() {
+    let p = jittered_lattice(Kinematics::Spheres3d, 8, 8, 8, 9, 0.05);
+    let floor = Wall::new(Vec3::new(0.0, 0.0, -6e-4), Vec3::new(0.0, 0.0, 1.0)).unwrap();
+    let mut state = DemState::new(p, vec![floor]);
+    let law = LinearSpringParams {
+        normal_stiffness: 2e4,
+        tangential_stiffness: 1e4,
+        friction_coefficient: 0.4,
+        thermal_bond: None,
+    }
+    .validate()
+    .unwrap();
+    let dt = 0.2 * critical_time_step(&state, &law);
+    let mut params = stepper_params(dt, 0.05);
+    params.gravity = [0.0, 0.0, -9.81];
+    params.verlet_skin = 1e-3;
+    let config = params.validate().unwrap();
+    let mut stepper = Stepper::new(law, config);
+    stepper.run(&mut state, 100).unwrap();
+    // Save right after a search; continue while no other search happens.
+    let generation = state.contact_generation;
+    while state.contact_generation == generation {
+        stepper.step(&mut state).unwrap();
+    }
+    let saved = state.clone();
+    let mut steps = 0;
+    while steps < 60 && state.contact_generation == saved.contact_generation {
+        stepper.step(&mut state).unwrap();
+        steps += 1;
+    }
+    let steps = steps - u64::from(state.contact_generation != saved.contact_generation);
+    let mut again = saved.clone();
+    stepper.run(&mut again, steps).unwrap();
+    let mut first = saved.clone();
+    Stepper::new(law, config).run(&mut first, steps).unwrap();
+    assert!(steps >= 20, "{steps} steps without a search");
+    assert_eq!(again.contact_generation, saved.contact_generation);
+    assert!(first.contacts.len() > 4 * first.contacts.active_count());
+    assert_eq!(again, first);
+}
