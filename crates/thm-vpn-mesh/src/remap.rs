@@ -18,9 +18,10 @@
 //!   is `q_o` minus the others, so each old cell's content is handed on exactly;
 //! - if no admissible cell overlaps `o` (a pore closed, a crack opened elsewhere), `q_o` goes to
 //!   the admissible new cell nearest to `o`: a breadth-first search over the new mesh's faces
-//!   starts from the cells overlapping `o` (or, if `o` lies outside the new mesh, from the new
-//!   cell with the nearest centroid) and takes, in the first layer that holds admissible cells,
-//!   the one whose centroid is nearest to `o`'s.
+//!   starts from the cells overlapping `o` (or, if `o` overlaps no new cell — it lies outside
+//!   the new mesh or turned inside out — from the new cell with the nearest centroid, found by
+//!   [`RemapOperator::new`] in a grid of the new centroids) and takes, in the first layer that
+//!   holds admissible cells, the one whose centroid is nearest to `o`'s.
 //!
 //! The new total therefore equals the old total up to the rounding of the sums (relative
 //! error of order `n_cells · ε`). Intensive fields (pressure, temperature) are not remapped:
@@ -59,6 +60,9 @@ pub struct RemapOperator {
     offsets: Vec<u32>,
     target: Vec<u32>,
     area: Vec<f64>,
+    /// For each old cell without overlaps (ascending): the new cell with the nearest
+    /// centroid.
+    nearest_new: Vec<(u32, u32)>,
     old_kind: Vec<CellKind>,
     old_centroid: Vec<[f64; 2]>,
     new_kind: Vec<CellKind>,
@@ -208,6 +212,139 @@ fn polygon_area<const N: usize>(p: &[[f64; 2]; CLIP_BUFFER]) -> f64 {
         twice += u[0] * v[1] - u[1] * v[0];
     }
     (0.5 * twice).max(0.0)
+}
+
+/// The index of the point of `points` nearest to `from` (the first one of the nearest, by
+/// index; 0 if no distance is below `f64::MAX`), by a scan over all of them.
+fn nearest_centroid(points: &[[f64; 2]], from: [f64; 2]) -> u32 {
+    let mut best = (f64::MAX, 0u32);
+    for (c, g) in points.iter().enumerate() {
+        let d = (g[0] - from[0]).powi(2) + (g[1] - from[1]).powi(2);
+        if d < best.0 {
+            best = (d, c as u32);
+        }
+    }
+    best.1
+}
+
+/// A uniform grid of points (about one per bin) for nearest-point queries that give the
+/// same answer as [`nearest_centroid`]'s scan.
+struct PointGrid {
+    lo: [f64; 2],
+    h: [f64; 2],
+    n: [usize; 2],
+    /// Points of bin `b` are `items[start[b]..start[b + 1]]`; `None` when a coordinate is
+    /// not finite (the queries then scan).
+    bins: Option<(Vec<u32>, Vec<u32>)>,
+}
+
+impl PointGrid {
+    fn new(points: &[[f64; 2]]) -> Self {
+        let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+        let mut finite = true;
+        for p in points {
+            for k in 0..2 {
+                finite &= p[k].is_finite();
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let mut grid = Self {
+            lo,
+            h: [1.0; 2],
+            n: [1; 2],
+            bins: None,
+        };
+        if !finite || points.is_empty() {
+            return grid;
+        }
+        let span = [hi[0] - lo[0], hi[1] - lo[1]];
+        let side = (span[0].max(f64::MIN_POSITIVE) * span[1].max(f64::MIN_POSITIVE)
+            / points.len() as f64)
+            .sqrt();
+        for (k, &extent) in span.iter().enumerate() {
+            grid.n[k] = ((extent / side) as usize + 1).clamp(1, 4096);
+            grid.h[k] = (extent / grid.n[k] as f64).max(f64::MIN_POSITIVE);
+        }
+        let mut start = vec![0u32; grid.n[0] * grid.n[1] + 1];
+        for p in points {
+            start[grid.bin(*p) + 1] += 1;
+        }
+        for b in 1..start.len() {
+            start[b] += start[b - 1];
+        }
+        let mut fill = start.clone();
+        let mut items = vec![0u32; points.len()];
+        for (c, p) in points.iter().enumerate() {
+            let b = grid.bin(*p);
+            items[fill[b] as usize] = c as u32;
+            fill[b] += 1;
+        }
+        grid.bins = Some((start, items));
+        grid
+    }
+
+    fn coords(&self, p: [f64; 2]) -> [usize; 2] {
+        // Truncation is the floor here: the argument is clamped to ≥ 0 first (NaN to 0).
+        std::array::from_fn(|k| {
+            (((p[k] - self.lo[k]) / self.h[k]).max(0.0) as usize).min(self.n[k] - 1)
+        })
+    }
+
+    fn bin(&self, p: [f64; 2]) -> usize {
+        let [x, y] = self.coords(p);
+        y * self.n[0] + x
+    }
+
+    /// The point nearest to `from`, ties to the lower index (what [`nearest_centroid`]
+    /// returns): the bins are searched in square rings around the bin of `from` until the
+    /// best distance is below the distance to the next ring (less one ring for the rounding
+    /// of the bin coordinates).
+    fn nearest(&self, points: &[[f64; 2]], from: [f64; 2]) -> u32 {
+        let Some((start, items)) = &self.bins else {
+            return nearest_centroid(points, from);
+        };
+        if !(from[0].is_finite() && from[1].is_finite()) {
+            return nearest_centroid(points, from);
+        }
+        let [gx, gy] = self.coords(from);
+        let (nx, ny) = (self.n[0] as isize, self.n[1] as isize);
+        let h = self.h[0].min(self.h[1]);
+        let mut best = (f64::MAX, NONE);
+        let visit = |x: isize, y: isize, best: &mut (f64, u32)| {
+            if x < 0 || y < 0 || x >= nx || y >= ny {
+                return;
+            }
+            let b = (y * nx + x) as usize;
+            for &c in &items[start[b] as usize..start[b + 1] as usize] {
+                let g = points[c as usize];
+                let d = (g[0] - from[0]).powi(2) + (g[1] - from[1]).powi(2);
+                if d < best.0 || (d == best.0 && c < best.1) {
+                    *best = (d, c);
+                }
+            }
+        };
+        let (gx, gy) = (gx as isize, gy as isize);
+        for r in 0..=nx.max(ny) {
+            if r == 0 {
+                visit(gx, gy, &mut best);
+            } else {
+                for x in gx - r..=gx + r {
+                    visit(x, gy - r, &mut best);
+                    visit(x, gy + r, &mut best);
+                }
+                for y in gy - r + 1..gy + r {
+                    visit(gx - r, y, &mut best);
+                    visit(gx + r, y, &mut best);
+                }
+            }
+            let reach = (r - 1).max(0) as f64 * h;
+            if best.1 != NONE && best.0 < reach * reach {
+                break;
+            }
+        }
+        if best.1 == NONE { 0 } else { best.1 }
+    }
 }
 
 fn tri_points(m: &PoreMesh, c: usize) -> [[f64; 2]; 3] {
@@ -398,10 +535,27 @@ impl RemapOperator {
             }
             offsets.push(target.len() as u32);
         }
+        // Old cells that meet no new cell (turned inside out, or outside the new mesh): the
+        // new cell with the nearest centroid, where `apply` starts its search for the nearest
+        // admissible cell. Found through a grid of the new centroids, built only if needed.
+        let mut nearest_new = Vec::new();
+        if nn > 0 {
+            let mut grid = None;
+            for o in 0..no {
+                if offsets[o] != offsets[o + 1] {
+                    continue;
+                }
+                if let Some(&from) = old.cell_centroid.get(o) {
+                    let grid = grid.get_or_insert_with(|| PointGrid::new(&new.cell_centroid));
+                    nearest_new.push((o as u32, grid.nearest(&new.cell_centroid, from)));
+                }
+            }
+        }
         Ok(Self {
             offsets,
             target,
             area,
+            nearest_new,
             old_kind: old.cell_kind.clone(),
             old_centroid: old.cell_centroid.clone(),
             new_kind: new.cell_kind.clone(),
@@ -551,14 +705,11 @@ impl RemapOperator {
             let mut seeds: Vec<u32> = self.overlaps(o).map(|(c, _)| c).collect();
             let from = self.old_centroid[o];
             if seeds.is_empty() && nn > 0 {
-                let mut best = (f64::MAX, 0u32);
-                for (c, g) in self.new_centroid.iter().enumerate() {
-                    let d = (g[0] - from[0]).powi(2) + (g[1] - from[1]).powi(2);
-                    if d < best.0 {
-                        best = (d, c as u32);
-                    }
-                }
-                seeds.push(best.1);
+                let seed = match self.nearest_new.binary_search_by_key(&(o as u32), |e| e.0) {
+                    Ok(k) => self.nearest_new[k].1,
+                    Err(_) => nearest_centroid(&self.new_centroid, from),
+                };
+                seeds.push(seed);
             }
             let mut cell = NONE;
             for strict in [true, false] {
@@ -734,5 +885,47 @@ mod tests {
             }
         }
         assert!(cut > 100_000, "only {cut} pairs were clipped");
+    }
+
+    /// The grid search for the nearest point gives the scan's answer (ties to the lower
+    /// index), for queries inside, on and far outside the point cloud, with duplicate points
+    /// and clustered points.
+    #[test]
+    fn grid_nearest_point_equals_the_scan() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for case in 0..40 {
+            let n = 1 + case * 37;
+            let mut pts: Vec<[f64; 2]> = (0..n)
+                .map(|k| {
+                    if k % 9 == 4 {
+                        [0.3, 0.7]
+                    } else if case % 3 == 0 {
+                        [rng.random_range(0.0..1e-3), rng.random_range(0.0..1.0)]
+                    } else {
+                        [rng.random_range(-1.0..2.0), rng.random_range(0.5..0.75)]
+                    }
+                })
+                .collect();
+            if case % 5 == 1 {
+                pts.extend_from_slice(&pts.clone()[..n / 2]);
+            }
+            let grid = PointGrid::new(&pts);
+            for q in 0..300 {
+                let from = match q % 4 {
+                    0 => pts[q % pts.len()],
+                    1 => [0.3, 0.7],
+                    2 => [rng.random_range(-50.0..50.0), rng.random_range(-50.0..50.0)],
+                    _ => [rng.random_range(-1.0..2.0), rng.random_range(0.0..1.0)],
+                };
+                assert_eq!(
+                    grid.nearest(&pts, from),
+                    nearest_centroid(&pts, from),
+                    "case {case}, query {from:?}"
+                );
+            }
+        }
+        let bad = [[0.0, 0.0], [f64::NAN, 1.0], [2.0, 2.0]];
+        let grid = PointGrid::new(&bad);
+        assert_eq!(grid.nearest(&bad, [1.9, 1.9]), 2);
     }
 }
