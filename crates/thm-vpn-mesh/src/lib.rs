@@ -103,11 +103,9 @@
 //! `dV/dt = thickness · dA/dt`. With a box outline the rates sum to zero to round-off. The
 //! T2T apertures (A-Eq. 9) are recomputed on the moved triangles; the S2S apertures follow the
 //! contact stresses through [`PackingMesh::update_s2s_apertures`]. [`MeshMotion::update`] is
-//! one allocation-free sweep over precomputed index arrays (anchor rows per vertex; triangle
-//! corners for areas, centroids and dV/dt together; face ends; channel cells) in which the
-//! stages are interleaved: after each step of vertices, cells, faces and channels advance as
-//! far as what they read is done, so it is read from cache right after it was written. The
-//! numbers are the same bit for bit as the stages called one by one.
+//! one allocation-free pass per entity over precomputed index arrays (anchor rows per vertex;
+//! triangle corners for areas, centroids and dV/dt together; face ends; channel cells), the
+//! same numbers bit for bit as the stages called one by one.
 //!
 //! ## Remesh trigger
 //!

@@ -203,66 +203,6 @@ fn signed_area(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]))
 }
 
-/// Area and centroid of the triangle `pa, pb, pc` (what the stage "cells" stores).
-#[inline(always)]
-pub(crate) fn cell_geometry(pa: [f64; 2], pb: [f64; 2], pc: [f64; 2]) -> (f64, [f64; 2]) {
-    (
-        signed_area(pa, pb, pc),
-        [
-            (pa[0] + pb[0] + pc[0]) * THIRD,
-            (pa[1] + pb[1] + pc[1]) * THIRD,
-        ],
-    )
-}
-
-/// `dA/dt · rate_scale` of the triangle `p` whose corners move with `u` (the exact
-/// derivative of the triangle area, see [`crate::motion`]).
-#[inline(always)]
-pub(crate) fn cell_rate(p: [[f64; 2]; 3], u: [[f64; 2]; 3], rate_scale: f64) -> f64 {
-    let [pa, pb, pc] = p;
-    let [ua, ub, uc] = u;
-    let e1 = [pb[0] - pa[0], pb[1] - pa[1]];
-    let e2 = [pc[0] - pa[0], pc[1] - pa[1]];
-    let d1 = [ub[0] - ua[0], ub[1] - ua[1]];
-    let d2 = [uc[0] - ua[0], uc[1] - ua[1]];
-    rate_scale * (0.5 * ((d1[0] * e2[1] - d1[1] * e2[0]) + (e1[0] * d2[1] - e1[1] * d2[0])))
-}
-
-/// Length, unit normal (the direction `pa → pb` turned clockwise; zero for a zero-length
-/// face) and mid-point of the face `pa → pb` (what the stage "faces" stores, element by
-/// element).
-#[inline(always)]
-pub(crate) fn face_geometry(pa: [f64; 2], pb: [f64; 2]) -> (f64, [f64; 2], [f64; 2]) {
-    let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
-    let len = (dx * dx + dy * dy).sqrt();
-    let inv = if len > 0.0 { 1.0 / len } else { 0.0 };
-    (
-        len,
-        [dy * inv, -dx * inv],
-        [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])],
-    )
-}
-
-/// Length of the channel between the centroids `p0`, `p1` and, for a T2T channel across a
-/// face of unit normal `n` and length `face_length`, its aperture `γ e sin ω` (A-Eq. 9).
-#[inline(always)]
-pub(crate) fn channel_geometry(
-    p0: [f64; 2],
-    p1: [f64; 2],
-    n: [f64; 2],
-    face_length: f64,
-    gamma: f64,
-) -> (f64, f64) {
-    let d = [p1[0] - p0[0], p1[1] - p0[1]];
-    let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
-    let sin_omega = if len > 0.0 {
-        (n[0] * d[0] + n[1] * d[1]).abs() / len
-    } else {
-        0.0
-    };
-    (len, gamma * face_length * sin_omega)
-}
-
 impl PoreMesh {
     /// Builds a mesh from vertices, triangles and cell kinds: orients triangles
     /// counter-clockwise, creates faces (edges) with their two cells, tags boundary faces by
@@ -537,7 +477,46 @@ impl PoreMesh {
             .zip(&mut self.cell_centroid)
         {
             let [pa, pb, pc] = t.map(|v| vx[v as usize]);
-            (*area, *centroid) = cell_geometry(pa, pb, pc);
+            *area = signed_area(pa, pb, pc);
+            *centroid = [
+                (pa[0] + pb[0] + pc[0]) * THIRD,
+                (pa[1] + pb[1] + pc[1]) * THIRD,
+            ];
+        }
+    }
+
+    /// Stage "cells" with the area rate: area, centroid and `dA/dt · rate_scale` of every
+    /// cell from the vertex velocities `vel`, in one pass (`dA/dt` is the exact derivative of
+    /// the triangle area, see [`crate::motion`]). `vel` has one entry per vertex and `rate`
+    /// one per cell (checked by the caller).
+    pub(crate) fn update_cell_geometry_and_rate(
+        &mut self,
+        vel: &[[f64; 2]],
+        rate_scale: f64,
+        rate: &mut [f64],
+    ) {
+        let vx = &self.vertices;
+        for (((t, area), centroid), rate) in self
+            .cell_vertices
+            .iter()
+            .zip(&mut self.cell_area)
+            .zip(&mut self.cell_centroid)
+            .zip(rate.iter_mut())
+        {
+            let [a, b, c] = t.map(|v| v as usize);
+            let (pa, pb, pc) = (vx[a], vx[b], vx[c]);
+            let (ua, ub, uc) = (vel[a], vel[b], vel[c]);
+            *area = signed_area(pa, pb, pc);
+            *centroid = [
+                (pa[0] + pb[0] + pc[0]) * THIRD,
+                (pa[1] + pb[1] + pc[1]) * THIRD,
+            ];
+            let e1 = [pb[0] - pa[0], pb[1] - pa[1]];
+            let e2 = [pc[0] - pa[0], pc[1] - pa[1]];
+            let d1 = [ub[0] - ua[0], ub[1] - ua[1]];
+            let d2 = [uc[0] - ua[0], uc[1] - ua[1]];
+            *rate = rate_scale
+                * (0.5 * ((d1[0] * e2[1] - d1[1] * e2[0]) + (e1[0] * d2[1] - e1[1] * d2[0])));
         }
     }
 
@@ -590,16 +569,18 @@ impl PoreMesh {
             .zip(&mut ch.aperture)
         {
             let (p0, p1) = (centroid[cells[0] as usize], centroid[cells[1] as usize]);
-            match (t2t_reduction_factor, kind) {
-                (Some(gamma), ChannelKind::T2T) => {
-                    let f = *face as usize;
-                    (*length, *aperture) =
-                        channel_geometry(p0, p1, normal[f], face_length[f], gamma);
-                }
-                _ => {
-                    let d = [p1[0] - p0[0], p1[1] - p0[1]];
-                    *length = (d[0] * d[0] + d[1] * d[1]).sqrt();
-                }
+            let d = [p1[0] - p0[0], p1[1] - p0[1]];
+            let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
+            *length = len;
+            if let (Some(gamma), ChannelKind::T2T) = (t2t_reduction_factor, kind) {
+                let f = *face as usize;
+                let n = normal[f];
+                let sin_omega = if len > 0.0 {
+                    (n[0] * d[0] + n[1] * d[1]).abs() / len
+                } else {
+                    0.0
+                };
+                *aperture = gamma * face_length[f] * sin_omega;
             }
         }
     }

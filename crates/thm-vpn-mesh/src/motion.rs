@@ -19,9 +19,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::MeshError;
-use crate::mesh::{
-    ChannelKind, PoreMesh, cell_geometry, cell_rate, channel_geometry, face_geometry,
-};
+use crate::mesh::PoreMesh;
 use crate::mesher::{Circle, Contact, PackingMesh};
 
 /// How a vertex is held in place besides its anchors.
@@ -271,37 +269,13 @@ pub fn vertex_kinematics_in_frames(
     pos: &mut [[f64; 2]],
     vel: &mut [[f64; 2]],
 ) {
-    let n = anchors
-        .len()
-        .min(anchors.start.len().saturating_sub(1))
-        .min(pos.len())
-        .min(vel.len());
-    vertex_kinematics_range(anchors, frames, 0..n, pos, vel);
-}
-
-/// Position and velocity of the vertices `range` (their anchor rows must be consistent, see
-/// [`check_anchors`]).
-#[inline(always)]
-fn vertex_kinematics_range(
-    anchors: &VertexAnchors,
-    frames: &[CircleFrame],
-    range: std::ops::Range<usize>,
-    pos: &mut [[f64; 2]],
-    vel: &mut [[f64; 2]],
-) {
     // The mesh-time position is read only for the few vertices that need it (no anchor, or a
     // constraint), so its cache lines are mostly left alone.
     let x0 = &anchors.reference;
-    let (lo, hi) = (range.start, range.end);
-    let rows = anchors.start[lo..=hi]
-        .windows(2)
-        .zip(&anchors.constraint[lo..hi]);
-    for (v, (((row, constraint), x_out), u_out)) in rows
-        .zip(pos[lo..hi].iter_mut())
-        .zip(vel[lo..hi].iter_mut())
-        .enumerate()
+    let rows = anchors.start.windows(2).zip(&anchors.constraint);
+    for (v, (((row, constraint), x_out), u_out)) in
+        rows.zip(pos.iter_mut()).zip(vel.iter_mut()).enumerate()
     {
-        let v = lo + v;
         let (a, b) = (row[0] as usize, row[1] as usize);
         let (mut x, mut u) = if b == a + 1 {
             // The common case: a point on one circle.
@@ -385,14 +359,11 @@ impl MeshMotion {
         Self::default()
     }
 
-    /// Validates the state, then runs the stages vertex kinematics (anchor rows → positions
-    /// and velocities); cells (areas, centroids and dV/dt, see [`Self::volume_rate`]); faces
-    /// (lengths, normals, mid-points); channels (lengths and the T2T apertures of A-Eq. 9,
-    /// which follow the triangles), interleaved in one allocation-free sweep (scratch is
-    /// sized on the first call): each stage advances over its entities, in index order, as
-    /// far as the entities they read are done, so what a stage reads was written a moment
-    /// before and is still in cache. Every entity is computed by the same expression as in
-    /// the separate stages, so the result is the same bit for bit.
+    /// Stage sequence, each stage one allocation-free pass over precomputed index arrays
+    /// (scratch is sized on the first call): validate the state; vertex kinematics (anchor
+    /// rows → positions and velocities); cells (areas, centroids and dV/dt, see
+    /// [`Self::volume_rate`]); faces (lengths, normals, mid-points); channels (lengths and
+    /// the T2T apertures of A-Eq. 9, which follow the triangles).
     pub fn update(
         &mut self,
         pm: &mut PackingMesh,
@@ -411,14 +382,18 @@ impl MeshMotion {
         self.velocity.resize(nv, [0.0; 2]);
         self.volume_rate.resize(pm.mesh.n_cells(), 0.0);
         circle_frames(motion, &mut self.frames);
-        fused_update(
-            &mut pm.mesh,
+        vertex_kinematics_in_frames(
             &pm.anchors,
             &self.frames,
+            &mut pm.mesh.vertices,
             &mut self.velocity,
-            &mut self.volume_rate,
-            pm.t2t_reduction_factor,
         );
+        let thickness = pm.mesh.thickness;
+        pm.mesh
+            .update_cell_geometry_and_rate(&self.velocity, thickness, &mut self.volume_rate);
+        pm.mesh.update_face_geometry();
+        pm.mesh
+            .update_channel_geometry(Some(pm.t2t_reduction_factor));
         Ok(())
     }
 
@@ -430,101 +405,6 @@ impl MeshMotion {
     /// Vertex velocities after the last [`Self::update`] [m/s].
     pub fn vertex_velocity(&self) -> &[[f64; 2]] {
         &self.velocity
-    }
-}
-
-/// Vertices per step of the sweep of [`fused_update`].
-const VERTEX_STEP: usize = 512;
-
-/// The sweep of [`MeshMotion::update`]: vertex kinematics in steps of [`VERTEX_STEP`]
-/// vertices; after each step every later stage advances while its next entity reads only
-/// entities already done (a cell: its corners; a face: its ends; a channel: its two cells
-/// and, for T2T, its face). The mesher numbers vertices in the order the triangles first use
-/// them and faces in the order of their first cell, so the stages keep close together; for
-/// any other numbering the stages simply run further behind, and once every vertex is done
-/// each stage finishes. `vel` has one entry per vertex and `rate` one per cell; the anchor
-/// rows are consistent with the vertices (checked by the caller).
-fn fused_update(
-    mesh: &mut PoreMesh,
-    anchors: &VertexAnchors,
-    frames: &[CircleFrame],
-    vel: &mut [[f64; 2]],
-    rate: &mut [f64],
-    gamma: f64,
-) {
-    let rate_scale = mesh.thickness;
-    let PoreMesh {
-        vertices,
-        cell_vertices,
-        cell_area,
-        cell_centroid,
-        face_vertices,
-        face_length,
-        face_normal,
-        face_centroid,
-        channels,
-        ..
-    } = mesh;
-    let (nv, nc, nf, nch) = (
-        vertices.len(),
-        cell_vertices.len(),
-        face_vertices.len(),
-        channels.len(),
-    );
-    let (mut v, mut c, mut f, mut ch) = (0usize, 0usize, 0usize, 0usize);
-    loop {
-        let v_end = (v + VERTEX_STEP).min(nv);
-        vertex_kinematics_range(anchors, frames, v..v_end, vertices, vel);
-        v = v_end;
-        let all_vertices = v == nv;
-        // Cells whose corners are done.
-        while c < nc {
-            let t = cell_vertices[c];
-            if !all_vertices && t[0].max(t[1]).max(t[2]) as usize >= v {
-                break;
-            }
-            let [ia, ib, ic] = t.map(|i| i as usize);
-            let p = [vertices[ia], vertices[ib], vertices[ic]];
-            (cell_area[c], cell_centroid[c]) = cell_geometry(p[0], p[1], p[2]);
-            rate[c] = cell_rate(p, [vel[ia], vel[ib], vel[ic]], rate_scale);
-            c += 1;
-        }
-        // Faces whose ends are done.
-        while f < nf {
-            let [a, b] = face_vertices[f];
-            if !all_vertices && a.max(b) as usize >= v {
-                break;
-            }
-            (face_length[f], face_normal[f], face_centroid[f]) =
-                face_geometry(vertices[a as usize], vertices[b as usize]);
-            f += 1;
-        }
-        // Channels whose cells (and face) are done.
-        let all_cells = c == nc;
-        let all_faces = f == nf;
-        while ch < nch {
-            let [c0, c1] = channels.cells[ch];
-            if !all_cells && c0.max(c1) as usize >= c {
-                break;
-            }
-            let (p0, p1) = (cell_centroid[c0 as usize], cell_centroid[c1 as usize]);
-            if channels.kind[ch] == ChannelKind::T2T {
-                let fi = channels.face[ch];
-                if !all_faces && fi as usize >= f {
-                    break;
-                }
-                let fi = fi as usize;
-                (channels.length[ch], channels.aperture[ch]) =
-                    channel_geometry(p0, p1, face_normal[fi], face_length[fi], gamma);
-            } else {
-                let d = [p1[0] - p0[0], p1[1] - p0[1]];
-                channels.length[ch] = (d[0] * d[0] + d[1] * d[1]).sqrt();
-            }
-            ch += 1;
-        }
-        if all_vertices {
-            break;
-        }
     }
 }
 
@@ -701,119 +581,4 @@ pub fn remesh_needed(
         return Ok(Some(RemeshReason::InvertedCell { cell }));
     }
     Ok(None)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::mesh::{CellKind, NONE};
-
-    /// The interleaved sweep equals the separate stages bit for bit also when the numbering
-    /// is not the mesher's (vertices numbered backwards, triangles scrambled, S2S channels
-    /// between far-apart cells), so that the stages wait on one another.
-    #[test]
-    fn sweep_equals_the_stages_for_any_numbering() {
-        let (nx, ny) = (40usize, 30usize);
-        let n_v = (nx + 1) * (ny + 1);
-        // Vertex (i, j) gets number n_v - 1 - (j (nx + 1) + i).
-        let id = |i: usize, j: usize| (n_v - 1 - (j * (nx + 1) + i)) as u32;
-        let mut vertices = vec![[0.0; 2]; n_v];
-        for j in 0..=ny {
-            for i in 0..=nx {
-                vertices[id(i, j) as usize] = [i as f64 / nx as f64, 0.75 * j as f64 / ny as f64];
-            }
-        }
-        let mut tris = Vec::new();
-        for j in 0..ny {
-            for i in 0..nx {
-                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-                tris.push([a, b, c]);
-                tris.push([a, c, d]);
-            }
-        }
-        // Scrambled: cell k is the triangle 7919 k mod n (7919 is prime, n = 2400).
-        let n_t = tris.len();
-        let tris: Vec<[u32; 3]> = (0..n_t).map(|k| tris[k * 7919 % n_t]).collect();
-        let kinds: Vec<CellKind> = (0..tris.len())
-            .map(|c| {
-                if c % 5 == 0 {
-                    CellKind::Solid { owner: 0 }
-                } else {
-                    CellKind::Fluid
-                }
-            })
-            .collect();
-        let mut mesh = PoreMesh::from_triangles(
-            vertices.clone(),
-            vec![NONE; n_v],
-            tris,
-            kinds,
-            0.01,
-            1e-9,
-            0.3,
-        )
-        .unwrap();
-        let nc = mesh.n_cells() as u32;
-        for cells in [[1, nc - 2], [nc - 3, 2], [nc / 2 + 1, 7]] {
-            let ch = &mut mesh.channels;
-            ch.kind.push(ChannelKind::S2S);
-            ch.cells.push(cells);
-            ch.length.push(0.0);
-            ch.aperture.push(1e-6);
-            ch.face.push(NONE);
-            ch.contact.push(0);
-        }
-        let circles: Vec<Circle> = (0..5)
-            .map(|k| Circle {
-                centre: [0.2 * k as f64, 0.1 + 0.1 * k as f64],
-                radius: 0.3 + 0.05 * k as f64,
-                owner: k,
-            })
-            .collect();
-        let mut anchors = VertexAnchors::default();
-        for (v, &p) in vertices.iter().enumerate() {
-            let list = [(v * 7 % 5) as u32, ((v * 3 + 1) % 5) as u32];
-            let n = 1 + v % 2;
-            anchors.push(p, &list[..n], VertexConstraint::Free, &circles);
-        }
-        let centre: Vec<[f64; 2]> = circles
-            .iter()
-            .map(|c| [c.centre[0] + 1e-3, c.centre[1] - 2e-3])
-            .collect();
-        let radius: Vec<f64> = circles.iter().map(|c| c.radius * 1.001).collect();
-        let rotation = vec![0.01, -0.02, 0.03, 0.0, 0.005];
-        let velocity = vec![[0.1, -0.2]; 5];
-        let angular_velocity = vec![1.0, -2.0, 0.5, 0.0, 3.0];
-        let radius_rate = vec![1e-3; 5];
-        let motion = CircleMotion {
-            centre: &centre,
-            radius: &radius,
-            rotation: &rotation,
-            velocity: &velocity,
-            angular_velocity: &angular_velocity,
-            radius_rate: &radius_rate,
-        };
-        let mut frames = Vec::new();
-        circle_frames(&motion, &mut frames);
-        let gamma = 0.3;
-
-        let mut swept = mesh.clone();
-        let (mut vel, mut rate) = (vec![[0.0; 2]; n_v], vec![0.0; mesh.n_cells()]);
-        fused_update(&mut swept, &anchors, &frames, &mut vel, &mut rate, gamma);
-
-        let mut staged = mesh.clone();
-        let mut vel2 = vec![[0.0; 2]; n_v];
-        vertex_kinematics_in_frames(&anchors, &frames, &mut staged.vertices, &mut vel2);
-        staged.update_geometry();
-        staged.update_t2t_apertures(gamma);
-        let mut rate2 = vec![0.0; mesh.n_cells()];
-        cell_area_rate(&staged, &vel2, &mut rate2).unwrap();
-        rate2.iter_mut().for_each(|x| *x *= staged.thickness);
-
-        assert_eq!(swept, staged);
-        assert_eq!(vel, vel2);
-        assert_eq!(rate, rate2);
-        assert_ne!(swept.vertices, mesh.vertices);
-        assert!(swept.channels.length.iter().all(|&l| l > 0.0));
-    }
 }
