@@ -95,8 +95,9 @@ fn orient(p0: [f64; 2], p1: [f64; 2], q: [f64; 2]) -> f64 {
 /// fixed-size buffers, with no allocation, and the area is that of the clipped polygon.
 ///
 /// Each clipping step is compiled once per polygon size ([`clip_by_edge`] is generic over
-/// it), so its loops are unrolled and branch-free: every candidate vertex is written and
-/// kept or dropped by advancing the output count.
+/// it), so its loops are unrolled; a polygon vertex is written whether or not it is kept
+/// and kept by advancing the output count. The steps, their order and the arithmetic are
+/// those of a generic loop over the vertices, so the area is the same bit for bit.
 pub fn triangle_overlap_area(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3]) -> f64 {
     let o = a[0];
     let a = a.map(|p| [p[0] - o[0], p[1] - o[1]]);
