@@ -232,7 +232,10 @@ fn nearest_centroid(points: &[[f64; 2]], from: [f64; 2]) -> u32 {
 /// same answer as [`nearest_centroid`]'s scan.
 struct PointGrid {
     lo: [f64; 2],
+    /// Bin sides and their inverses (bin coordinates are `(p − lo) · inv`, rounded down; the
+    /// search allows one ring for the rounding).
     h: [f64; 2],
+    inv: [f64; 2],
     n: [usize; 2],
     /// Points of bin `b` are `items[start[b]..start[b + 1]]`; `None` when a coordinate is
     /// not finite (the queries then scan).
@@ -240,6 +243,7 @@ struct PointGrid {
 }
 
 impl PointGrid {
+    #[inline(never)]
     fn new(points: &[[f64; 2]]) -> Self {
         let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
         let mut finite = true;
@@ -253,6 +257,7 @@ impl PointGrid {
         let mut grid = Self {
             lo,
             h: [1.0; 2],
+            inv: [1.0; 2],
             n: [1; 2],
             bins: None,
         };
@@ -267,19 +272,22 @@ impl PointGrid {
             grid.n[k] = ((extent / side) as usize + 1).clamp(1, 4096);
             grid.h[k] = (extent / grid.n[k] as f64).max(f64::MIN_POSITIVE);
         }
+        grid.inv = [1.0 / grid.h[0], 1.0 / grid.h[1]];
+        // Bin of every point, computed once for the count and the fill.
+        let bin_of: Vec<u32> = points.iter().map(|&p| grid.bin(p) as u32).collect();
         let mut start = vec![0u32; grid.n[0] * grid.n[1] + 1];
-        for p in points {
-            start[grid.bin(*p) + 1] += 1;
+        for &b in &bin_of {
+            start[b as usize + 1] += 1;
         }
         for b in 1..start.len() {
             start[b] += start[b - 1];
         }
         let mut fill = start.clone();
         let mut items = vec![0u32; points.len()];
-        for (c, p) in points.iter().enumerate() {
-            let b = grid.bin(*p);
-            items[fill[b] as usize] = c as u32;
-            fill[b] += 1;
+        for (c, &b) in bin_of.iter().enumerate() {
+            let slot = &mut fill[b as usize];
+            items[*slot as usize] = c as u32;
+            *slot += 1;
         }
         grid.bins = Some((start, items));
         grid
@@ -288,7 +296,7 @@ impl PointGrid {
     fn coords(&self, p: [f64; 2]) -> [usize; 2] {
         // Truncation is the floor here: the argument is clamped to ≥ 0 first (NaN to 0).
         std::array::from_fn(|k| {
-            (((p[k] - self.lo[k]) / self.h[k]).max(0.0) as usize).min(self.n[k] - 1)
+            (((p[k] - self.lo[k]) * self.inv[k]).max(0.0) as usize).min(self.n[k] - 1)
         })
     }
 
@@ -301,6 +309,7 @@ impl PointGrid {
     /// returns): the bins are searched in square rings around the bin of `from` until the
     /// best distance is below the distance to the next ring (less one ring for the rounding
     /// of the bin coordinates).
+    #[inline(never)]
     fn nearest(&self, points: &[[f64; 2]], from: [f64; 2]) -> u32 {
         let Some((start, items)) = &self.bins else {
             return nearest_centroid(points, from);
