@@ -18,9 +18,10 @@
 //!   is `q_o` minus the others, so each old cell's content is handed on exactly;
 //! - if no admissible cell overlaps `o` (a pore closed, a crack opened elsewhere), `q_o` goes to
 //!   the admissible new cell nearest to `o`: a breadth-first search over the new mesh's faces
-//!   starts from the cells overlapping `o` (or, if `o` lies outside the new mesh, from the new
-//!   cell with the nearest centroid) and takes, in the first layer that holds admissible cells,
-//!   the one whose centroid is nearest to `o`'s.
+//!   starts from the cells overlapping `o` (or, if `o` overlaps no new cell — it lies outside
+//!   the new mesh or turned inside out — from the new cell with the nearest centroid, found by
+//!   [`RemapOperator::new`] in a grid of the new centroids) and takes, in the first layer that
+//!   holds admissible cells, the one whose centroid is nearest to `o`'s.
 //!
 //! The new total therefore equals the old total up to the rounding of the sums (relative
 //! error of order `n_cells · ε`). Intensive fields (pressure, temperature) are not remapped:
@@ -59,6 +60,9 @@ pub struct RemapOperator {
     offsets: Vec<u32>,
     target: Vec<u32>,
     area: Vec<f64>,
+    /// For each old cell without overlaps (ascending): the new cell with the nearest
+    /// centroid.
+    nearest_new: Vec<(u32, u32)>,
     old_kind: Vec<CellKind>,
     old_centroid: Vec<[f64; 2]>,
     new_kind: Vec<CellKind>,
@@ -89,11 +93,16 @@ fn orient(p0: [f64; 2], p1: [f64; 2], q: [f64; 2]) -> f64 {
 /// `a` on its outer side separates them (area 0, exactly); `a` inside `b` gives `a`'s area.
 /// Otherwise `a` is clipped by the edges of `b` that cut it (Sutherland–Hodgman) in two
 /// fixed-size buffers, with no allocation, and the area is that of the clipped polygon.
+///
+/// Each clipping step is compiled once per polygon size ([`clip_by_edge`] is generic over
+/// it), so its loops are unrolled; a polygon vertex is written whether or not it is kept
+/// and kept by advancing the output count. The steps, their order and the arithmetic are
+/// those of a generic loop over the vertices, so the area is the same bit for bit.
 pub fn triangle_overlap_area(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3]) -> f64 {
     let o = a[0];
     let a = a.map(|p| [p[0] - o[0], p[1] - o[1]]);
     let b = b.map(|p| [p[0] - o[0], p[1] - o[1]]);
-    // side_a[k][i]: corner i of `a` against edge k of `b` (and the other way round).
+    // side_a[k][i]: corner i of `a` against edge k of `b`.
     let mut side_a = [[0.0f64; 3]; 3];
     for (k, row) in side_a.iter_mut().enumerate() {
         let (p0, p1) = (b[k], b[(k + 1) % 3]);
@@ -102,83 +111,250 @@ pub fn triangle_overlap_area(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3]) -> f64 {
             orient(p0, p1, a[1]),
             orient(p0, p1, a[2]),
         ];
-        if row.iter().all(|&s| s <= 0.0) {
+        if row[0] <= 0.0 && row[1] <= 0.0 && row[2] <= 0.0 {
             return 0.0;
         }
     }
-    if side_a.iter().flatten().all(|&s| s >= 0.0) {
+    let keeps = side_a.map(|row| row[0] >= 0.0 && row[1] >= 0.0 && row[2] >= 0.0);
+    if keeps[0] && keeps[1] && keeps[2] {
         return (0.5 * orient(a[0], a[1], a[2])).max(0.0);
     }
     // Clip `a` by the edges of `b` that cut it. An edge with all three corners of `a` on its
-    // inner side leaves every polygon inside `a` unchanged, so it is skipped; while nothing
-    // has been cut, the orientations are those already computed.
-    let mut bufs = [[[0.0f64; 2]; CLIP_CAPACITY]; 2];
-    bufs[0][..3].copy_from_slice(&a);
-    let (mut cur, mut n, mut original) = (0usize, 3usize, true);
-    for (k, row) in side_a.iter().enumerate() {
-        if row.iter().all(|&s| s >= 0.0) {
+    // inner side leaves every polygon inside `a` unchanged, so it is skipped; the first edge
+    // that cuts uses the orientations already computed.
+    let mut poly = Polygon {
+        p: [[0.0; 2]; CLIP_BUFFER],
+        n: 3,
+    };
+    poly.p[..3].copy_from_slice(&a);
+    let mut original = true;
+    for k in 0..3 {
+        if keeps[k] {
             continue;
         }
         let (p0, p1) = (b[k], b[(k + 1) % 3]);
-        let mut side = [0.0f64; CLIP_CAPACITY];
-        if original {
-            side[..3].copy_from_slice(row);
-        } else {
-            for (s, &q) in side[..n].iter_mut().zip(&bufs[cur][..n]) {
-                *s = orient(p0, p1, q);
-            }
-        }
-        let [first, second] = &mut bufs;
-        n = if cur == 0 {
-            clip_by_edge(&first[..n], &side[..n], second)
-        } else {
-            clip_by_edge(&second[..n], &side[..n], first)
+        let src = &poly.p;
+        poly = match (original, poly.n) {
+            (true, _) => clip_by_edge(src, &side_a[k]),
+            (false, 3) => clip_by_edge(src, &sides::<3>(src, p0, p1)),
+            (false, 4) => clip_by_edge(src, &sides::<4>(src, p0, p1)),
+            (false, 5) => clip_by_edge(src, &sides::<5>(src, p0, p1)),
+            (false, 6) => clip_by_edge(src, &sides::<6>(src, p0, p1)),
+            (false, 7) => clip_by_edge(src, &sides::<7>(src, p0, p1)),
+            (false, _) => clip_by_edge(src, &sides::<8>(src, p0, p1)),
         };
-        cur = 1 - cur;
         original = false;
-        if n < 3 {
+        if poly.n < 3 {
             return 0.0;
         }
     }
-    polygon_area(&bufs[cur][..n])
+    match poly.n {
+        3 => polygon_area::<3>(&poly.p),
+        4 => polygon_area::<4>(&poly.p),
+        5 => polygon_area::<5>(&poly.p),
+        6 => polygon_area::<6>(&poly.p),
+        7 => polygon_area::<7>(&poly.p),
+        _ => polygon_area::<8>(&poly.p),
+    }
 }
 
-/// One Sutherland–Hodgman step: the polygon `src` with orientations `side` against a line
-/// (≥ 0 inside) clipped to the inner half-plane into `dst`; returns the new vertex count.
+/// Room for a clipped polygon: [`CLIP_CAPACITY`] kept vertices plus the slot a dropped
+/// vertex is written to.
+const CLIP_BUFFER: usize = CLIP_CAPACITY + 1;
+
+/// A polygon of at most [`CLIP_CAPACITY`] vertices in a fixed buffer.
+#[derive(Clone, Copy)]
+struct Polygon {
+    p: [[f64; 2]; CLIP_BUFFER],
+    n: usize,
+}
+
+/// Orientations of the first `N` vertices of `p` against the line `p0 → p1`.
 #[inline(always)]
-fn clip_by_edge(src: &[[f64; 2]], side: &[f64], dst: &mut [[f64; 2]; CLIP_CAPACITY]) -> usize {
-    let n = src.len();
+fn sides<const N: usize>(p: &[[f64; 2]; CLIP_BUFFER], p0: [f64; 2], p1: [f64; 2]) -> [f64; N] {
+    std::array::from_fn(|i| orient(p0, p1, p[i]))
+}
+
+/// One Sutherland–Hodgman step on the first `N` vertices of `src` with orientations `s`
+/// against a line: the polygon clipped to the inner half-plane (orientation ≥ 0). A vertex
+/// is kept, and the crossing of an edge whose ends lie on different sides is added, while
+/// fewer than [`CLIP_CAPACITY`] vertices have been written (a vertex is written whether or
+/// not it is kept, and kept by advancing the count).
+#[inline(always)]
+fn clip_by_edge<const N: usize>(src: &[[f64; 2]; CLIP_BUFFER], s: &[f64; N]) -> Polygon {
+    let mut dst = Polygon {
+        p: [[0.0; 2]; CLIP_BUFFER],
+        n: 0,
+    };
     let mut m = 0usize;
-    for i in 0..n {
-        let j = if i + 1 == n { 0 } else { i + 1 };
-        let (su, sv) = (side[i], side[j]);
-        if su >= 0.0 && m < CLIP_CAPACITY {
-            dst[m] = src[i];
-            m += 1;
-        }
+    for i in 0..N {
+        let j = if i + 1 == N { 0 } else { i + 1 };
+        let (su, sv) = (s[i], s[j]);
+        dst.p[m] = src[i];
+        m += usize::from(su >= 0.0 && m < CLIP_CAPACITY);
         if (su >= 0.0) != (sv >= 0.0) && m < CLIP_CAPACITY {
             let t = su / (su - sv);
             let (u, v) = (src[i], src[j]);
-            dst[m] = [u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1])];
+            dst.p[m] = [u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1])];
             m += 1;
         }
     }
-    m
+    dst.n = m;
+    dst
 }
 
-/// Area of a counter-clockwise polygon (shoelace), 0 for fewer than three vertices or a
-/// negative round-off result.
-fn polygon_area(p: &[[f64; 2]]) -> f64 {
-    let n = p.len();
-    if n < 3 {
-        return 0.0;
-    }
+/// Area of the counter-clockwise polygon formed by the first `N` vertices of `p`
+/// (shoelace), 0 for a negative round-off result.
+#[inline(always)]
+fn polygon_area<const N: usize>(p: &[[f64; 2]; CLIP_BUFFER]) -> f64 {
     let mut twice = 0.0;
-    for i in 0..n {
-        let (u, v) = (p[i], p[if i + 1 == n { 0 } else { i + 1 }]);
+    for i in 0..N {
+        let (u, v) = (p[i], p[if i + 1 == N { 0 } else { i + 1 }]);
         twice += u[0] * v[1] - u[1] * v[0];
     }
     (0.5 * twice).max(0.0)
+}
+
+/// The index of the point of `points` nearest to `from` (the first one of the nearest, by
+/// index; 0 if no distance is below `f64::MAX`), by a scan over all of them.
+fn nearest_centroid(points: &[[f64; 2]], from: [f64; 2]) -> u32 {
+    let mut best = (f64::MAX, 0u32);
+    for (c, g) in points.iter().enumerate() {
+        let d = (g[0] - from[0]).powi(2) + (g[1] - from[1]).powi(2);
+        if d < best.0 {
+            best = (d, c as u32);
+        }
+    }
+    best.1
+}
+
+/// A uniform grid of points (about one per bin) for nearest-point queries that give the
+/// same answer as [`nearest_centroid`]'s scan.
+struct PointGrid {
+    lo: [f64; 2],
+    /// Bin sides and their inverses (bin coordinates are `(p − lo) · inv`, rounded down; the
+    /// search allows one ring for the rounding).
+    h: [f64; 2],
+    inv: [f64; 2],
+    n: [usize; 2],
+    /// Points of bin `b` are `items[start[b]..start[b + 1]]`; `None` when a coordinate is
+    /// not finite (the queries then scan).
+    bins: Option<(Vec<u32>, Vec<u32>)>,
+}
+
+impl PointGrid {
+    #[inline(never)]
+    fn new(points: &[[f64; 2]]) -> Self {
+        let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+        let mut finite = true;
+        for p in points {
+            for k in 0..2 {
+                finite &= p[k].is_finite();
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let mut grid = Self {
+            lo,
+            h: [1.0; 2],
+            inv: [1.0; 2],
+            n: [1; 2],
+            bins: None,
+        };
+        if !finite || points.is_empty() {
+            return grid;
+        }
+        let span = [hi[0] - lo[0], hi[1] - lo[1]];
+        let side = (span[0].max(f64::MIN_POSITIVE) * span[1].max(f64::MIN_POSITIVE)
+            / points.len() as f64)
+            .sqrt();
+        for (k, &extent) in span.iter().enumerate() {
+            grid.n[k] = ((extent / side) as usize + 1).clamp(1, 4096);
+            grid.h[k] = (extent / grid.n[k] as f64).max(f64::MIN_POSITIVE);
+        }
+        grid.inv = [1.0 / grid.h[0], 1.0 / grid.h[1]];
+        // Bin of every point, computed once for the count and the fill.
+        let bin_of: Vec<u32> = points.iter().map(|&p| grid.bin(p) as u32).collect();
+        let mut start = vec![0u32; grid.n[0] * grid.n[1] + 1];
+        for &b in &bin_of {
+            start[b as usize + 1] += 1;
+        }
+        for b in 1..start.len() {
+            start[b] += start[b - 1];
+        }
+        let mut fill = start.clone();
+        let mut items = vec![0u32; points.len()];
+        for (c, &b) in bin_of.iter().enumerate() {
+            let slot = &mut fill[b as usize];
+            items[*slot as usize] = c as u32;
+            *slot += 1;
+        }
+        grid.bins = Some((start, items));
+        grid
+    }
+
+    fn coords(&self, p: [f64; 2]) -> [usize; 2] {
+        // Truncation is the floor here: the argument is clamped to ≥ 0 first (NaN to 0).
+        std::array::from_fn(|k| {
+            (((p[k] - self.lo[k]) * self.inv[k]).max(0.0) as usize).min(self.n[k] - 1)
+        })
+    }
+
+    fn bin(&self, p: [f64; 2]) -> usize {
+        let [x, y] = self.coords(p);
+        y * self.n[0] + x
+    }
+
+    /// The point nearest to `from`, ties to the lower index (what [`nearest_centroid`]
+    /// returns): the bins are searched in square rings around the bin of `from` until the
+    /// best distance is below the distance to the next ring (less one ring for the rounding
+    /// of the bin coordinates).
+    #[inline(never)]
+    fn nearest(&self, points: &[[f64; 2]], from: [f64; 2]) -> u32 {
+        let Some((start, items)) = &self.bins else {
+            return nearest_centroid(points, from);
+        };
+        if !(from[0].is_finite() && from[1].is_finite()) {
+            return nearest_centroid(points, from);
+        }
+        let [gx, gy] = self.coords(from);
+        let (nx, ny) = (self.n[0] as isize, self.n[1] as isize);
+        let h = self.h[0].min(self.h[1]);
+        let mut best = (f64::MAX, NONE);
+        let visit = |x: isize, y: isize, best: &mut (f64, u32)| {
+            if x < 0 || y < 0 || x >= nx || y >= ny {
+                return;
+            }
+            let b = (y * nx + x) as usize;
+            for &c in &items[start[b] as usize..start[b + 1] as usize] {
+                let g = points[c as usize];
+                let d = (g[0] - from[0]).powi(2) + (g[1] - from[1]).powi(2);
+                if d < best.0 || (d == best.0 && c < best.1) {
+                    *best = (d, c);
+                }
+            }
+        };
+        let (gx, gy) = (gx as isize, gy as isize);
+        for r in 0..=nx.max(ny) {
+            if r == 0 {
+                visit(gx, gy, &mut best);
+            } else {
+                for x in gx - r..=gx + r {
+                    visit(x, gy - r, &mut best);
+                    visit(x, gy + r, &mut best);
+                }
+                for y in gy - r + 1..gy + r {
+                    visit(gx - r, y, &mut best);
+                    visit(gx + r, y, &mut best);
+                }
+            }
+            let reach = (r - 1).max(0) as f64 * h;
+            if best.1 != NONE && best.0 < reach * reach {
+                break;
+            }
+        }
+        if best.1 == NONE { 0 } else { best.1 }
+    }
 }
 
 fn tri_points(m: &PoreMesh, c: usize) -> [[f64; 2]; 3] {
@@ -369,10 +545,27 @@ impl RemapOperator {
             }
             offsets.push(target.len() as u32);
         }
+        // Old cells that meet no new cell (turned inside out, or outside the new mesh): the
+        // new cell with the nearest centroid, where `apply` starts its search for the nearest
+        // admissible cell. Found through a grid of the new centroids, built only if needed.
+        let mut nearest_new = Vec::new();
+        if nn > 0 {
+            let mut grid = None;
+            for o in 0..no {
+                if offsets[o] != offsets[o + 1] {
+                    continue;
+                }
+                if let Some(&from) = old.cell_centroid.get(o) {
+                    let grid = grid.get_or_insert_with(|| PointGrid::new(&new.cell_centroid));
+                    nearest_new.push((o as u32, grid.nearest(&new.cell_centroid, from)));
+                }
+            }
+        }
         Ok(Self {
             offsets,
             target,
             area,
+            nearest_new,
             old_kind: old.cell_kind.clone(),
             old_centroid: old.cell_centroid.clone(),
             new_kind: new.cell_kind.clone(),
@@ -522,14 +715,11 @@ impl RemapOperator {
             let mut seeds: Vec<u32> = self.overlaps(o).map(|(c, _)| c).collect();
             let from = self.old_centroid[o];
             if seeds.is_empty() && nn > 0 {
-                let mut best = (f64::MAX, 0u32);
-                for (c, g) in self.new_centroid.iter().enumerate() {
-                    let d = (g[0] - from[0]).powi(2) + (g[1] - from[1]).powi(2);
-                    if d < best.0 {
-                        best = (d, c as u32);
-                    }
-                }
-                seeds.push(best.1);
+                let seed = match self.nearest_new.binary_search_by_key(&(o as u32), |e| e.0) {
+                    Ok(k) => self.nearest_new[k].1,
+                    Err(_) => nearest_centroid(&self.new_centroid, from),
+                };
+                seeds.push(seed);
             }
             let mut cell = NONE;
             for strict in [true, false] {
@@ -555,5 +745,197 @@ impl RemapOperator {
             new_values[cell as usize] += q;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    const CAP: usize = CLIP_CAPACITY;
+
+    // The generic (loop-based) clipper this module used before its steps were specialised by
+    // polygon size: the reference the specialised one must match bit for bit.
+    fn reference_overlap_area(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3]) -> f64 {
+        let o = a[0];
+        let a = a.map(|p| [p[0] - o[0], p[1] - o[1]]);
+        let b = b.map(|p| [p[0] - o[0], p[1] - o[1]]);
+        // side_a[k][i]: corner i of `a` against edge k of `b` (and the other way round).
+        let mut side_a = [[0.0f64; 3]; 3];
+        for (k, row) in side_a.iter_mut().enumerate() {
+            let (p0, p1) = (b[k], b[(k + 1) % 3]);
+            *row = [
+                orient(p0, p1, a[0]),
+                orient(p0, p1, a[1]),
+                orient(p0, p1, a[2]),
+            ];
+            if row.iter().all(|&s| s <= 0.0) {
+                return 0.0;
+            }
+        }
+        if side_a.iter().flatten().all(|&s| s >= 0.0) {
+            return (0.5 * orient(a[0], a[1], a[2])).max(0.0);
+        }
+        // Clip `a` by the edges of `b` that cut it. An edge with all three corners of `a` on its
+        // inner side leaves every polygon inside `a` unchanged, so it is skipped; while nothing
+        // has been cut, the orientations are those already computed.
+        let mut bufs = [[[0.0f64; 2]; CAP]; 2];
+        bufs[0][..3].copy_from_slice(&a);
+        let (mut cur, mut n, mut original) = (0usize, 3usize, true);
+        for (k, row) in side_a.iter().enumerate() {
+            if row.iter().all(|&s| s >= 0.0) {
+                continue;
+            }
+            let (p0, p1) = (b[k], b[(k + 1) % 3]);
+            let mut side = [0.0f64; CAP];
+            if original {
+                side[..3].copy_from_slice(row);
+            } else {
+                for (s, &q) in side[..n].iter_mut().zip(&bufs[cur][..n]) {
+                    *s = orient(p0, p1, q);
+                }
+            }
+            let [first, second] = &mut bufs;
+            n = if cur == 0 {
+                reference_clip(&first[..n], &side[..n], second)
+            } else {
+                reference_clip(&second[..n], &side[..n], first)
+            };
+            cur = 1 - cur;
+            original = false;
+            if n < 3 {
+                return 0.0;
+            }
+        }
+        reference_polygon_area(&bufs[cur][..n])
+    }
+
+    /// One Sutherland–Hodgman step: the polygon `src` with orientations `side` against a line
+    /// (≥ 0 inside) clipped to the inner half-plane into `dst`; returns the new vertex count.
+    #[inline(always)]
+    fn reference_clip(src: &[[f64; 2]], side: &[f64], dst: &mut [[f64; 2]; CAP]) -> usize {
+        let n = src.len();
+        let mut m = 0usize;
+        for i in 0..n {
+            let j = if i + 1 == n { 0 } else { i + 1 };
+            let (su, sv) = (side[i], side[j]);
+            if su >= 0.0 && m < CAP {
+                dst[m] = src[i];
+                m += 1;
+            }
+            if (su >= 0.0) != (sv >= 0.0) && m < CAP {
+                let t = su / (su - sv);
+                let (u, v) = (src[i], src[j]);
+                dst[m] = [u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1])];
+                m += 1;
+            }
+        }
+        m
+    }
+
+    /// Area of a counter-clockwise polygon (shoelace), 0 for fewer than three vertices or a
+    /// negative round-off result.
+    fn reference_polygon_area(p: &[[f64; 2]]) -> f64 {
+        let n = p.len();
+        if n < 3 {
+            return 0.0;
+        }
+        let mut twice = 0.0;
+        for i in 0..n {
+            let (u, v) = (p[i], p[if i + 1 == n { 0 } else { i + 1 }]);
+            twice += u[0] * v[1] - u[1] * v[0];
+        }
+        (0.5 * twice).max(0.0)
+    }
+
+    fn ccw(mut t: [[f64; 2]; 3]) -> [[f64; 2]; 3] {
+        if orient(t[0], t[1], t[2]) < 0.0 {
+            t.swap(1, 2);
+        }
+        t
+    }
+
+    /// Random pairs, near-copies (as between an old and a new mesh of slightly moved
+    /// circles), shared corners and shared edges: the same bits as the generic clipper.
+    #[test]
+    fn specialised_clipper_matches_the_generic_one_bit_for_bit() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut cut = 0;
+        for case in 0..200_000 {
+            let mut pt = || [rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)];
+            let a = ccw([pt(), pt(), pt()]);
+            let eps = [1e-1, 1e-3, 1e-8, 0.0][case % 4];
+            let mut b = match (case / 4) % 4 {
+                0 => [pt(), pt(), pt()],
+                1 => a.map(|p| {
+                    let d = pt();
+                    [p[0] + eps * d[0], p[1] + eps * d[1]]
+                }),
+                2 => [a[0], pt(), pt()],
+                _ => [a[1], a[0], pt()],
+            };
+            b = ccw(b);
+            let shift = [1e3 * ((case % 7) as f64 - 3.0), 0.25];
+            let (a, b) = (
+                a.map(|p| [p[0] + shift[0], p[1] + shift[1]]),
+                b.map(|p| [p[0] + shift[0], p[1] + shift[1]]),
+            );
+            for (x, y) in [(&a, &b), (&b, &a)] {
+                let (got, want) = (triangle_overlap_area(x, y), reference_overlap_area(x, y));
+                assert_eq!(
+                    got.to_bits(),
+                    want.to_bits(),
+                    "case {case}: {got} vs {want}"
+                );
+                if got > 0.0 && got < 0.5 * orient(x[0], x[1], x[2]) {
+                    cut += 1;
+                }
+            }
+        }
+        assert!(cut > 100_000, "only {cut} pairs were clipped");
+    }
+
+    /// The grid search for the nearest point gives the scan's answer (ties to the lower
+    /// index), for queries inside, on and far outside the point cloud, with duplicate points
+    /// and clustered points.
+    #[test]
+    fn grid_nearest_point_equals_the_scan() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for case in 0..40 {
+            let n = 1 + case * 37;
+            let mut pts: Vec<[f64; 2]> = (0..n)
+                .map(|k| {
+                    if k % 9 == 4 {
+                        [0.3, 0.7]
+                    } else if case % 3 == 0 {
+                        [rng.random_range(0.0..1e-3), rng.random_range(0.0..1.0)]
+                    } else {
+                        [rng.random_range(-1.0..2.0), rng.random_range(0.5..0.75)]
+                    }
+                })
+                .collect();
+            if case % 5 == 1 {
+                pts.extend_from_slice(&pts.clone()[..n / 2]);
+            }
+            let grid = PointGrid::new(&pts);
+            for q in 0..300 {
+                let from = match q % 4 {
+                    0 => pts[q % pts.len()],
+                    1 => [0.3, 0.7],
+                    2 => [rng.random_range(-50.0..50.0), rng.random_range(-50.0..50.0)],
+                    _ => [rng.random_range(-1.0..2.0), rng.random_range(0.0..1.0)],
+                };
+                assert_eq!(
+                    grid.nearest(&pts, from),
+                    nearest_centroid(&pts, from),
+                    "case {case}, query {from:?}"
+                );
+            }
+        }
+        let bad = [[0.0, 0.0], [f64::NAN, 1.0], [2.0, 2.0]];
+        let grid = PointGrid::new(&bad);
+        assert_eq!(grid.nearest(&bad, [1.9, 1.9]), 2);
     }
 }
