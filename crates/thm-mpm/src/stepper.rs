@@ -39,14 +39,16 @@ use crate::error::MpmError;
 use crate::grid::Grid;
 use crate::material::{Constitutive, MaterialInput};
 use crate::points::{Mat2, MaterialPoints, Sym2};
-use crate::shape::Stencil;
+use crate::shape::{PackedStencil, Stencil};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Node rows per scatter strip (≥ 2 keeps same-colour strips disjoint).
 pub const STRIP_ROWS: usize = 2;
 
-/// Points per parallel work item of the point stages (gather, constitutive update).
+/// Points per chunk of the point stages (gather, constitutive update). Rayon splits their
+/// sweeps down to one or two chunks per task, so that a thread that is descheduled (on a
+/// shared machine) holds little work that the other threads cannot take over.
 const POINT_CHUNK: usize = 512;
 
 /// Points per binning chunk (and per work item of the time-step test). Each chunk sorts its
@@ -167,7 +169,9 @@ pub struct Mpm {
     grid_fields: GridFields,
     /// Mapped nodal temperature before prescribed values were imposed.
     temperature_mapped: Vec<f64>,
-    stencils: Vec<Stencil>,
+    /// The stencil of each point, computed once per step (binning) for both scatter passes
+    /// and the gather.
+    stencils: Vec<PackedStencil>,
     /// Number of scatter strips.
     strips: usize,
     /// The point indices of each binning chunk, sorted by strip (index order within a strip),
@@ -952,7 +956,7 @@ impl Mpm {
         let ny = grid.nodes()[1];
         let strips = self.strips;
         let chunks = n.div_ceil(BIN_CHUNK);
-        self.stencils.resize(n, Stencil::default());
+        self.stencils.resize(n, PackedStencil::default());
         self.strip_order.resize(n, 0);
         self.chunk_starts.clear();
         self.chunk_starts.resize(chunks * (strips + 1), 0);
@@ -967,13 +971,15 @@ impl Mpm {
             self.chunk_spans.par_chunks_mut(ny),
         )
             .into_par_iter()
+            .with_max_len(1)
             .enumerate()
             .map(|(c, (st, order, x, l, starts, spans))| {
                 for ((st, x), l) in st.iter_mut().zip(x).zip(l) {
-                    *st = Stencil::new(grid, *x, *l);
-                    starts[st.y.base / STRIP_ROWS] += 1;
-                    let bx = st.x.base as u32;
-                    spans[st.y.base] = hull(spans[st.y.base], [bx, bx + 3]);
+                    let s = Stencil::new(grid, *x, *l);
+                    *st = PackedStencil::pack(&s);
+                    starts[s.y.base / STRIP_ROWS] += 1;
+                    let bx = s.x.base as u32;
+                    spans[s.y.base] = hull(spans[s.y.base], [bx, bx + 3]);
                 }
                 // Inclusive prefix sums make `starts[s]` the end of strip s; placing the points
                 // backwards moves it to the strip's start and keeps each strip in index order.
@@ -985,7 +991,7 @@ impl Mpm {
                 starts[strips] = end;
                 let first = c * BIN_CHUNK;
                 for (j, st) in st.iter().enumerate().rev() {
-                    let slot = &mut starts[st.y.base / STRIP_ROWS];
+                    let slot = &mut starts[st.base_row() / STRIP_ROWS];
                     *slot -= 1;
                     order[*slot as usize] = (first + j) as u32;
                 }
@@ -1097,7 +1103,15 @@ impl Mpm {
                 }
                 if let Some(s) = even.strip(u) {
                     for_strip(order, starts, strips, s, |p| {
-                        scatter_pass1(b.sums, row0, row_len, &stencils[p], points, loads, p)
+                        scatter_pass1(
+                            b.sums,
+                            row0,
+                            row_len,
+                            &stencils[p].unpack(),
+                            points,
+                            loads,
+                            p,
+                        )
                     });
                 }
             },
@@ -1117,7 +1131,15 @@ impl Mpm {
                 let row0 = b.first_row;
                 if let Some(s) = odd.strip(u) {
                     for_strip(order, starts, strips, s, |p| {
-                        scatter_pass1(b.sums, row0, row_len, &stencils[p], points, loads, p)
+                        scatter_pass1(
+                            b.sums,
+                            row0,
+                            row_len,
+                            &stencils[p].unpack(),
+                            points,
+                            loads,
+                            p,
+                        )
                     });
                 }
                 let mut bad = None;
@@ -1164,7 +1186,7 @@ impl Mpm {
                             b.temperature_old,
                             row0,
                             row_len,
-                            &stencils[p],
+                            &stencils[p].unpack(),
                             points,
                             p,
                         )
@@ -1198,7 +1220,7 @@ impl Mpm {
                             b.temperature_old,
                             row0,
                             row_len,
-                            &stencils[p],
+                            &stencils[p].unpack(),
                             points,
                             p,
                         )
@@ -1339,6 +1361,7 @@ impl Mpm {
             points.half_size.par_chunks(C),
         )
             .into_par_iter()
+            .with_max_len(2)
             .enumerate()
             .map(|(c, (x, v, t, tr, l, tdot, st, half))| {
                 let chunk = GatherChunk {
@@ -1392,6 +1415,7 @@ impl Mpm {
             ),
         )
             .into_par_iter()
+            .with_max_len(2)
             .enumerate()
             .filter_map(|(c, ((f, vol, eps, sig, q, k, ms), (l, tdot, t, m, v0)))| {
                 let chunk = RespondChunk {
@@ -1459,6 +1483,7 @@ impl Mpm {
             ),
         )
             .into_par_iter()
+            .with_max_len(2)
             .enumerate()
             .map(
                 |(c, ((x, v, t, tr, l, tdot, st, half), (f, vol, eps, sig, q, k, ms, m, v0)))| {
@@ -1584,7 +1609,7 @@ struct GatherChunk<'a> {
     tr: &'a mut [f64],
     l: &'a mut [Mat2],
     tdot: &'a mut [f64],
-    st: &'a [Stencil],
+    st: &'a [PackedStencil],
     half: &'a [[f64; 2]],
 }
 
@@ -1611,6 +1636,7 @@ fn gather_chunk(first: usize, c: GatherChunk<'_>, g: &GatherInputs<'_>) -> (usiz
         let mut rate = 0.0;
         let mut t_new = 0.0;
         let mut lg = [0.0; 4];
+        let st = &st.unpack();
         let origin = st.y.base * row_len + st.x.base;
         for b in 0..3 {
             let start = origin + b * row_len;
