@@ -40,6 +40,10 @@
 //! updated last (USL), with the velocity gradient of the updated nodal velocities. P2G scatters
 //! in horizontal strips coloured even/odd, so every node sums its contributions in one fixed
 //! order: results are bit-identical for any number of rayon threads (tested with 1 and 2).
+//! [`Mpm::step`] runs these stages fused into six parallel sweeps (binning with the time-step
+//! check, two per scatter pass with the nodal temperature and the grid update finished row by
+//! row behind the odd strips, gather with constitutive update per chunk of points), with the
+//! results of the stage sequence; no stage is serial over the points.
 //! Each point's 1D uGIMP weights and gradients are computed once per step (branch-free
 //! closed form, [`shape::axis3`]) and shared by the scatters and the gather; node updates
 //! visit only the nodes that the stencils touch.
