@@ -495,17 +495,7 @@ fn friction_work_equals_the_kinetic_energy_lost_by_a_sliding_disk() {
 #[test]
 fn verlet_skin_and_skipped_pairs_do_not_change_a_bit() {
     let run = |skin: f64| -> DemState {
-        let p = jittered_lattice(Kinematics::Spheres3d, 8, 8, 8, 5, 0.3);
-        let floor = Wall::new(Vec3::new(0.0, 0.0, -6e-4), Vec3::new(0.0, 0.0, 1.0)).unwrap();
-        let mut state = DemState::new(p, vec![floor]);
-        let law = LinearSpringParams {
-            normal_stiffness: 2e4,
-            tangential_stiffness: 1e4,
-            friction_coefficient: 0.4,
-            thermal_bond: None,
-        }
-        .validate()
-        .unwrap();
+        let (mut state, law) = frictional_lattice_on_floor(5, 0.3);
         let dt = 0.2 * critical_time_step(&state, &law);
         let mut params = stepper_params(dt, 0.05);
         params.gravity = [0.0, 0.0, -9.81e3];
@@ -548,17 +538,7 @@ fn verlet_skin_and_skipped_pairs_do_not_change_a_bit() {
 /// saved one) and stepping on gives the bits of a fresh stepper.
 #[test]
 fn a_stepper_carries_nothing_from_one_state_to_another() {
-    let p = jittered_lattice(Kinematics::Spheres3d, 8, 8, 8, 9, 0.05);
-    let floor = Wall::new(Vec3::new(0.0, 0.0, -6e-4), Vec3::new(0.0, 0.0, 1.0)).unwrap();
-    let mut state = DemState::new(p, vec![floor]);
-    let law = LinearSpringParams {
-        normal_stiffness: 2e4,
-        tangential_stiffness: 1e4,
-        friction_coefficient: 0.4,
-        thermal_bond: None,
-    }
-    .validate()
-    .unwrap();
+    let (mut state, law) = frictional_lattice_on_floor(9, 0.05);
     let dt = 0.2 * critical_time_step(&state, &law);
     let mut params = stepper_params(dt, 0.05);
     params.gravity = [0.0, 0.0, -9.81];
@@ -586,4 +566,20 @@ fn a_stepper_carries_nothing_from_one_state_to_another() {
     assert_eq!(again.contact_generation, saved.contact_generation);
     assert!(first.contacts.len() > 4 * first.contacts.active_count());
     assert_eq!(again, first);
+}
+
+/// An 8 × 8 × 8 jittered lattice of spheres above a floor, with a linear spring + Coulomb law
+/// (the setting of the Verlet-skin and stepper-reuse tests).
+fn frictional_lattice_on_floor(seed: u64, jitter: f64) -> (DemState, LinearSpring) {
+    let p = jittered_lattice(Kinematics::Spheres3d, 8, 8, 8, seed, jitter);
+    let floor = Wall::new(Vec3::new(0.0, 0.0, -6e-4), Vec3::new(0.0, 0.0, 1.0)).unwrap();
+    let law = LinearSpringParams {
+        normal_stiffness: 2e4,
+        tangential_stiffness: 1e4,
+        friction_coefficient: 0.4,
+        thermal_bond: None,
+    }
+    .validate()
+    .unwrap();
+    (DemState::new(p, vec![floor]), law)
 }
