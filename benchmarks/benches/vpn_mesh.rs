@@ -5,26 +5,12 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
-use thm_vpn_mesh::packing::{PackingSpec, overlap_contacts, random_packing};
+use thm_benchmarks::pore_layer::{SmallMotion, layer_10k};
+use thm_vpn_mesh::packing::overlap_contacts;
 use thm_vpn_mesh::*;
 
-fn packing() -> (Vec<Circle>, PackingSpec) {
-    // 10 000 circles of 4-8 mm at 10 % porosity fill about 0.557 m × 0.557 m; the packing of
-    // a slightly larger square is cut to exactly 10 000.
-    let side = 0.558;
-    let spec = PackingSpec {
-        box_max: [side, side],
-        sweeps: 300,
-        ..PackingSpec::paper_bar(7)
-    };
-    let mut cs = random_packing(&spec);
-    assert!(cs.len() >= 10_000, "only {} circles", cs.len());
-    cs.truncate(10_000);
-    (cs, spec)
-}
-
 fn bench(c: &mut Criterion) {
-    let (cs, spec) = packing();
+    let (cs, spec) = layer_10k();
     let contacts = overlap_contacts(&cs, 1e7);
     let mut g = c.benchmark_group("vpn_mesh_10k");
     g.sample_size(10);
@@ -50,27 +36,8 @@ fn bench(c: &mut Criterion) {
             b.iter(|| mesh_packing(black_box(&cs), &contacts, &s).unwrap())
         });
         // Geometry update: every circle moved a little.
-        let k = cs.len();
-        let vel: Vec<[f64; 2]> = (0..k)
-            .map(|i| [2e-5 * (i as f64).sin(), 2e-5 * (i as f64).cos()])
-            .collect();
-        let omega: Vec<f64> = (0..k).map(|i| 0.002 * (0.3 * i as f64).sin()).collect();
-        let rdot = vec![1e-7; k];
-        let centre: Vec<[f64; 2]> = cs
-            .iter()
-            .zip(&vel)
-            .map(|(c, v)| [c.centre[0] + v[0], c.centre[1] + v[1]])
-            .collect();
-        let radius: Vec<f64> = cs.iter().map(|c| c.radius + 1e-7).collect();
-        let rotation = omega.clone();
-        let motion = CircleMotion {
-            centre: &centre,
-            radius: &radius,
-            rotation: &rotation,
-            velocity: &vel,
-            angular_velocity: &omega,
-            radius_rate: &rdot,
-        };
+        let small = SmallMotion::of(&cs);
+        let motion = small.motion();
         let mut moved = pm.clone();
         let mut mm = MeshMotion::new();
         mm.update(&mut moved, &motion).unwrap();
@@ -82,8 +49,8 @@ fn bench(c: &mut Criterion) {
             .iter()
             .enumerate()
             .map(|(i, c)| Circle {
-                centre: centre[i],
-                radius: radius[i],
+                centre: small.centre[i],
+                radius: small.radius[i],
                 owner: c.owner,
             })
             .collect();

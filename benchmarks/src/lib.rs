@@ -56,3 +56,70 @@ pub mod mpm_column {
         (Mpm::new(config), state)
     }
 }
+
+pub mod pore_layer {
+    //! The 10 000-circle single layer and the small motion shared by the mesh bench and the
+    //! per-stage example.
+    use thm_vpn_mesh::packing::{PackingSpec, random_packing};
+    use thm_vpn_mesh::{Circle, CircleMotion};
+
+    /// 10 000 circles of 4–8 mm at 10 % porosity: they fill about 0.557 m × 0.557 m, so the
+    /// packing of a slightly larger square is cut to exactly 10 000.
+    pub fn layer_10k() -> (Vec<Circle>, PackingSpec) {
+        let side = 0.558;
+        let spec = PackingSpec {
+            box_max: [side, side],
+            sweeps: 300,
+            ..PackingSpec::paper_bar(7)
+        };
+        let mut cs = random_packing(&spec);
+        assert!(cs.len() >= 10_000, "only {} circles", cs.len());
+        cs.truncate(10_000);
+        (cs, spec)
+    }
+
+    /// Every circle moved a little (tens of µm, a few mrad, 0.1 µm of growth): the circle state
+    /// a geometry update between remeshes sees.
+    #[derive(Debug, Clone)]
+    pub struct SmallMotion {
+        pub centre: Vec<[f64; 2]>,
+        pub radius: Vec<f64>,
+        pub velocity: Vec<[f64; 2]>,
+        pub angular_velocity: Vec<f64>,
+        pub radius_rate: Vec<f64>,
+    }
+
+    impl SmallMotion {
+        pub fn of(cs: &[Circle]) -> Self {
+            let k = cs.len();
+            let velocity: Vec<[f64; 2]> = (0..k)
+                .map(|i| [2e-5 * (i as f64).sin(), 2e-5 * (i as f64).cos()])
+                .collect();
+            let angular_velocity = (0..k).map(|i| 0.002 * (0.3 * i as f64).sin()).collect();
+            let centre = cs
+                .iter()
+                .zip(&velocity)
+                .map(|(c, v)| [c.centre[0] + v[0], c.centre[1] + v[1]])
+                .collect();
+            Self {
+                centre,
+                radius: cs.iter().map(|c| c.radius + 1e-7).collect(),
+                velocity,
+                angular_velocity,
+                radius_rate: vec![1e-7; k],
+            }
+        }
+
+        /// The circle state (the rotation since the mesh equals the angular velocity × 1 s).
+        pub fn motion(&self) -> CircleMotion<'_> {
+            CircleMotion {
+                centre: &self.centre,
+                radius: &self.radius,
+                rotation: &self.angular_velocity,
+                velocity: &self.velocity,
+                angular_velocity: &self.angular_velocity,
+                radius_rate: &self.radius_rate,
+            }
+        }
+    }
+}

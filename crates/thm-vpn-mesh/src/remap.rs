@@ -2,7 +2,9 @@
 //!
 //! [`RemapOperator::new`] intersects every old triangle with the new triangles it touches
 //! and stores the overlap areas `A(o ∩ n)` as a sparse old → new matrix. The new cell holding
-//! the old cell's centroid is found in a uniform bin grid; from it a breadth-first walk over
+//! the old cell's centroid is found by a visibility walk from the previous old cell's seed
+//! (old cells that follow each other are neighbours, see the mesher's locality order), or,
+//! where the walk fails, in a uniform bin grid of the new cells; from it a breadth-first walk over
 //! the new mesh's faces visits the new cells meeting the old one (the new cells meeting a
 //! convex cell form an edge-connected set) and stops when the overlaps found cover the old
 //! cell (to 10⁻⁹ of its area). Each pair is intersected by [`triangle_overlap_area`]: a
@@ -19,8 +21,9 @@
 //! - if no admissible cell overlaps `o` (a pore closed, a crack opened elsewhere), `q_o` goes to
 //!   the admissible new cell nearest to `o`: a breadth-first search over the new mesh's faces
 //!   starts from the cells overlapping `o` (or, if `o` overlaps no new cell — it lies outside
-//!   the new mesh or turned inside out — from the new cell with the nearest centroid, found by
-//!   [`RemapOperator::new`] in a grid of the new centroids) and takes, in the first layer that
+//!   the new mesh or turned inside out — from the new cell holding `o`'s centroid, else from the
+//!   new cell with the nearest centroid, found by [`RemapOperator::new`] in a grid of the new
+//!   centroids) and takes, in the first layer that
 //!   holds admissible cells, the one whose centroid is nearest to `o`'s.
 //!
 //! The new total therefore equals the old total up to the rounding of the sums (relative
@@ -60,8 +63,8 @@ pub struct RemapOperator {
     offsets: Vec<u32>,
     target: Vec<u32>,
     area: Vec<f64>,
-    /// For each old cell without overlaps (ascending): the new cell with the nearest
-    /// centroid.
+    /// For each old cell without overlaps (ascending): the new cell holding its centroid, or
+    /// else the new cell with the nearest centroid.
     nearest_new: Vec<(u32, u32)>,
     old_kind: Vec<CellKind>,
     old_centroid: Vec<[f64; 2]>,
@@ -361,20 +364,75 @@ fn tri_points(m: &PoreMesh, c: usize) -> [[f64; 2]; 3] {
     m.cell_vertices[c].map(|v| m.vertices[v as usize])
 }
 
-impl RemapOperator {
-    /// Intersects the cells of `old` with the cells of `new`.
-    pub fn new(old: &PoreMesh, new: &PoreMesh) -> Result<Self, MeshError> {
-        for (what, m) in [("old mesh vertex", old), ("new mesh vertex", new)] {
-            for (index, v) in m.vertices.iter().enumerate() {
-                for &value in v {
-                    if !value.is_finite() {
-                        return Err(MeshError::NonFinite { what, index, value });
-                    }
-                }
-            }
+/// Lower and upper corners of the bounding box of a triangle.
+fn bounding_box(t: &[[f64; 2]; 3]) -> ([f64; 2], [f64; 2]) {
+    let (mut a, mut b) = ([f64::MAX; 2], [f64::MIN; 2]);
+    for q in t {
+        for k in 0..2 {
+            a[k] = a[k].min(q[k]);
+            b[k] = b[k].max(q[k]);
         }
-        let nn = new.n_cells();
-        // Bin grid over the new mesh.
+    }
+    (a, b)
+}
+
+/// True when `g` lies in the closed counter-clockwise triangle `t`.
+#[inline(always)]
+fn holds(t: &[[f64; 2]; 3], g: [f64; 2]) -> bool {
+    orient(t[0], t[1], g) >= 0.0 && orient(t[1], t[2], g) >= 0.0 && orient(t[2], t[0], g) >= 0.0
+}
+
+/// Longest walk [`walk_to`] takes before it gives up (the bin grid answers then).
+const WALK_STEPS: usize = 64;
+
+/// The cell of `tri` holding `g`, found by a visibility walk from cell `from` over
+/// `adjacency` (`adjacency[c][k]` is the cell across the edge from corner `k` to `k + 1`):
+/// from each cell it steps across the edge that `g` lies furthest outside of. `None` when
+/// `from` is [`NONE`], the walk reaches the mesh boundary (`g` outside, or beyond a concave
+/// outline) or takes more than [`WALK_STEPS`] steps (a walk can cycle in a constrained
+/// triangulation); the caller then searches its bin grid.
+fn walk_to(tri: &[[[f64; 2]; 3]], adjacency: &[[u32; 3]], from: u32, g: [f64; 2]) -> Option<u32> {
+    let mut c = from;
+    for _ in 0..WALK_STEPS {
+        let t = tri.get(c as usize)?;
+        let s = [
+            orient(t[0], t[1], g),
+            orient(t[1], t[2], g),
+            orient(t[2], t[0], g),
+        ];
+        if s[0] >= 0.0 && s[1] >= 0.0 && s[2] >= 0.0 {
+            return Some(c);
+        }
+        let k = if s[0] <= s[1] && s[0] <= s[2] {
+            0
+        } else if s[1] <= s[2] {
+            1
+        } else {
+            2
+        };
+        c = adjacency[c as usize][k];
+        if c == NONE {
+            return None;
+        }
+    }
+    None
+}
+
+/// A uniform grid over the new mesh listing, for every bin, the cells whose bounding box
+/// meets it (bins of about 1.5 mean cell sides, at most about four per cell).
+struct CellBins {
+    lo: [f64; 2],
+    h: [f64; 2],
+    n: [usize; 2],
+    /// Cells of bin `b` are `items[start[b]..start[b + 1]]`.
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl CellBins {
+    #[inline(never)]
+    fn new(new: &PoreMesh, bbox: &[([f64; 2], [f64; 2])]) -> Self {
+        let nn = bbox.len();
         let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
         for v in &new.vertices {
             for k in 0..2 {
@@ -397,54 +455,92 @@ impl RemapOperator {
         if min_h.is_finite() && h < min_h {
             h = min_h;
         }
-        let nx = ((span[0] / h) as usize + 1).clamp(1, 4096);
-        let ny = ((span[1] / h) as usize + 1).clamp(1, 4096);
-        let hx = (span[0] / nx as f64).max(f64::MIN_POSITIVE);
-        let hy = (span[1] / ny as f64).max(f64::MIN_POSITIVE);
-        let bin_range = |p: &[[f64; 2]; 3]| {
-            let (mut a, mut b) = ([f64::MAX; 2], [f64::MIN; 2]);
-            for q in p {
-                for k in 0..2 {
-                    a[k] = a[k].min(q[k]);
-                    b[k] = b[k].max(q[k]);
-                }
-            }
-            // Truncation is the floor here: the argument is clamped to ≥ 0 first.
-            let ix = |x: f64| (((x - lo[0]) / hx).max(0.0) as usize).min(nx - 1);
-            let iy = |y: f64| (((y - lo[1]) / hy).max(0.0) as usize).min(ny - 1);
-            (ix(a[0]), ix(b[0]), iy(a[1]), iy(b[1]), a, b)
+        let n = [
+            ((span[0] / h) as usize + 1).clamp(1, 4096),
+            ((span[1] / h) as usize + 1).clamp(1, 4096),
+        ];
+        let mut bins = Self {
+            lo,
+            h: [
+                (span[0] / n[0] as f64).max(f64::MIN_POSITIVE),
+                (span[1] / n[1] as f64).max(f64::MIN_POSITIVE),
+            ],
+            n,
+            start: vec![0u32; n[0] * n[1] + 1],
+            items: Vec::new(),
         };
-        // Packed corner coordinates of the new cells (one contiguous record per cell).
-        let new_tri: Vec<[[f64; 2]; 3]> = (0..nn).map(|c| tri_points(new, c)).collect();
-        // Bin range and bounding box of every new cell, computed once.
-        let mut new_bins: Vec<[u32; 4]> = Vec::with_capacity(nn);
-        let mut new_bbox: Vec<([f64; 2], [f64; 2])> = Vec::with_capacity(nn);
-        let mut start = vec![0u32; nx * ny + 1];
-        for t in &new_tri {
-            let (x0, x1, y0, y1, a, b) = bin_range(t);
-            new_bins.push([x0 as u32, x1 as u32, y0 as u32, y1 as u32]);
-            new_bbox.push((a, b));
+        let ranges: Vec<[usize; 4]> = bbox
+            .iter()
+            .map(|&(a, b)| {
+                let (x0, x1, y0, y1) = bins.range(a, b);
+                [x0, x1, y0, y1]
+            })
+            .collect();
+        let nx = n[0];
+        for &[x0, x1, y0, y1] in &ranges {
             for y in y0..=y1 {
                 for x in x0..=x1 {
-                    start[y * nx + x + 1] += 1;
+                    bins.start[y * nx + x + 1] += 1;
                 }
             }
         }
-        for b in 0..nx * ny {
-            start[b + 1] += start[b];
+        for b in 0..n[0] * n[1] {
+            bins.start[b + 1] += bins.start[b];
         }
-        let mut items = vec![0u32; start[nx * ny] as usize];
-        let mut fill = start.clone();
-        for (c, &[x0, x1, y0, y1]) in new_bins.iter().enumerate() {
-            for y in y0 as usize..=y1 as usize {
-                for x in x0 as usize..=x1 as usize {
+        bins.items = vec![0u32; bins.start[n[0] * n[1]] as usize];
+        let mut fill = bins.start.clone();
+        for (c, &[x0, x1, y0, y1]) in ranges.iter().enumerate() {
+            for y in y0..=y1 {
+                for x in x0..=x1 {
                     let b = y * nx + x;
-                    items[fill[b] as usize] = c as u32;
+                    bins.items[fill[b] as usize] = c as u32;
                     fill[b] += 1;
                 }
             }
         }
-        drop(new_bins);
+        bins
+    }
+
+    /// Bin columns `x0..=x1` and rows `y0..=y1` meeting the box `a..b` (clamped to the grid).
+    fn range(&self, a: [f64; 2], b: [f64; 2]) -> (usize, usize, usize, usize) {
+        // Truncation is the floor here: the argument is clamped to ≥ 0 first.
+        let ix = |x: f64| (((x - self.lo[0]) / self.h[0]).max(0.0) as usize).min(self.n[0] - 1);
+        let iy = |y: f64| (((y - self.lo[1]) / self.h[1]).max(0.0) as usize).min(self.n[1] - 1);
+        (ix(a[0]), ix(b[0]), iy(a[1]), iy(b[1]))
+    }
+
+    fn cells(&self, x: usize, y: usize) -> &[u32] {
+        let b = y * self.n[0] + x;
+        &self.items[self.start[b] as usize..self.start[b + 1] as usize]
+    }
+
+    /// The first cell (in bin order) holding `g`.
+    fn holding(&self, tri: &[[[f64; 2]; 3]], g: [f64; 2]) -> Option<u32> {
+        let (x, _, y, _) = self.range(g, g);
+        self.cells(x, y)
+            .iter()
+            .copied()
+            .find(|&c| holds(&tri[c as usize], g))
+    }
+}
+
+impl RemapOperator {
+    /// Intersects the cells of `old` with the cells of `new`.
+    pub fn new(old: &PoreMesh, new: &PoreMesh) -> Result<Self, MeshError> {
+        for (what, m) in [("old mesh vertex", old), ("new mesh vertex", new)] {
+            for (index, v) in m.vertices.iter().enumerate() {
+                for &value in v {
+                    if !value.is_finite() {
+                        return Err(MeshError::NonFinite { what, index, value });
+                    }
+                }
+            }
+        }
+        let nn = new.n_cells();
+        // Packed corner coordinates and bounding boxes of the new cells (one contiguous
+        // record per cell).
+        let new_tri: Vec<[[f64; 2]; 3]> = (0..nn).map(|c| tri_points(new, c)).collect();
+        let new_bbox: Vec<([f64; 2], [f64; 2])> = new_tri.iter().map(bounding_box).collect();
         let mut new_adjacency = vec![[NONE; 3]; nn];
         for (c, faces) in new.cell_faces.iter().enumerate() {
             for k in 0..3 {
@@ -452,6 +548,8 @@ impl RemapOperator {
                 new_adjacency[c][k] = if a == c as u32 { b } else { a };
             }
         }
+        // The bin grid of the new cells, built the first time a walk fails.
+        let mut bins: Option<CellBins> = None;
         // Old cells: seed with the new cell holding the old centroid, then walk across faces
         // while the overlap is positive (the new cells meeting a convex old cell form an
         // edge-connected set). If no new cell holds the centroid, test every binned candidate.
@@ -462,12 +560,14 @@ impl RemapOperator {
         let mut area = Vec::with_capacity(no * 6);
         let mut stamp = vec![NONE; nn];
         let mut queue: Vec<u32> = Vec::with_capacity(64);
-        let contains = |t: &[[f64; 2]; 3], g: [f64; 2]| {
-            (0..3).all(|k| {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                (b[0] - a[0]) * (g[1] - a[1]) - (b[1] - a[1]) * (g[0] - a[0]) >= 0.0
-            })
-        };
+        // The seed of the previous old cell: neighbouring old cells are neighbours in memory
+        // (the mesher's locality order), so the walk to the next seed is short.
+        // The first walk starts at new cell 0, which the locality order puts in the same corner
+        // as old cell 0.
+        let mut previous_seed = 0;
+        // For old cells turned inside out (no overlap by definition): the new cell holding
+        // their centroid, where `apply` starts its nearest-cell search.
+        let mut held: Vec<(u32, u32)> = Vec::new();
         for o in 0..no {
             let p = tri_points(old, o);
             let tag = o as u32;
@@ -476,15 +576,25 @@ impl RemapOperator {
                     (p[0][0] + p[1][0] + p[2][0]) / 3.0,
                     (p[0][1] + p[1][1] + p[2][1]) / 3.0,
                 ];
-                let (gx, _, gy, ..) = bin_range(&[g, g, g]);
-                let bin = gy * nx + gx;
-                let seed = items[start[bin] as usize..start[bin + 1] as usize]
-                    .iter()
-                    .copied()
-                    .find(|&c| contains(&new_tri[c as usize], g));
+                let walked = walk_to(&new_tri, &new_adjacency, previous_seed, g);
+                if orient(p[0], p[1], p[2]).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                    // A clockwise or flat triangle overlaps nothing ([`triangle_overlap_area`]
+                    // takes counter-clockwise triangles and returns 0 for the others).
+                    if let Some(s) = walked {
+                        held.push((tag, s));
+                        previous_seed = s;
+                    }
+                    offsets.push(target.len() as u32);
+                    continue;
+                }
+                let seed = walked.or_else(|| {
+                    bins.get_or_insert_with(|| CellBins::new(new, &new_bbox))
+                        .holding(&new_tri, g)
+                });
+                let (a, b) = bounding_box(&p);
                 match seed {
                     Some(s) => {
-                        let (.., a, b) = bin_range(&p);
+                        previous_seed = s;
                         // Once the overlaps found cover the old cell, what is left on the
                         // stack can only touch it in slivers below round-off: stop there.
                         let full = COVERED_FRACTION * 0.5 * orient(p[0], p[1], p[2]);
@@ -518,11 +628,11 @@ impl RemapOperator {
                         }
                     }
                     None => {
-                        let (x0, x1, y0, y1, a, b) = bin_range(&p);
+                        let bins = bins.get_or_insert_with(|| CellBins::new(new, &new_bbox));
+                        let (x0, x1, y0, y1) = bins.range(a, b);
                         for y in y0..=y1 {
                             for x in x0..=x1 {
-                                let bin = y * nx + x;
-                                for &c in &items[start[bin] as usize..start[bin + 1] as usize] {
+                                for &c in bins.cells(x, y) {
                                     if stamp[c as usize] == tag {
                                         continue;
                                     }
@@ -545,17 +655,21 @@ impl RemapOperator {
             }
             offsets.push(target.len() as u32);
         }
-        // Old cells that meet no new cell (turned inside out, or outside the new mesh): the
-        // new cell with the nearest centroid, where `apply` starts its search for the nearest
-        // admissible cell. Found through a grid of the new centroids, built only if needed.
+        // Old cells that meet no new cell (turned inside out, or outside the new mesh): where
+        // `apply` starts its search for the nearest admissible cell, the new cell holding the
+        // old centroid if the walk found one, else the new cell with the nearest centroid
+        // (through a grid of the new centroids, built only if needed).
         let mut nearest_new = Vec::new();
         if nn > 0 {
             let mut grid = None;
+            let mut held = held.into_iter().peekable();
             for o in 0..no {
                 if offsets[o] != offsets[o + 1] {
                     continue;
                 }
-                if let Some(&from) = old.cell_centroid.get(o) {
+                if let Some((_, s)) = held.next_if(|&(h, _)| h as usize == o) {
+                    nearest_new.push((o as u32, s));
+                } else if let Some(&from) = old.cell_centroid.get(o) {
                     let grid = grid.get_or_insert_with(|| PointGrid::new(&new.cell_centroid));
                     nearest_new.push((o as u32, grid.nearest(&new.cell_centroid, from)));
                 }

@@ -157,3 +157,37 @@ fn s2s_aperture_law() {
     assert_eq!(pm.mesh.channels.aperture[ch], law.aperture(s));
     assert!(pm.update_s2s_apertures(&[], &law).is_err());
 }
+
+/// Cells follow a space-filling curve: consecutive cells are neighbours in space (their
+/// centroids lie a few cell sides apart on average, against a third of the box side for a
+/// random order), and vertices are numbered in order of first use by the cells.
+#[test]
+fn cells_and_vertices_are_in_locality_order() {
+    let spec = thm_vpn_mesh::packing::PackingSpec::paper_bar(3);
+    let cs = thm_vpn_mesh::packing::random_packing(&spec);
+    let contacts = thm_vpn_mesh::packing::overlap_contacts(&cs, 1e7);
+    let pm = mesh_packing(&cs, &contacts, &box_params(spec.box_min, spec.box_max, 24)).unwrap();
+    let m = &pm.mesh;
+    let n = m.n_cells();
+    let mean_side = (m.cell_area.iter().sum::<f64>() / n as f64).sqrt();
+    let step: f64 = m
+        .cell_centroid
+        .windows(2)
+        .map(|w| ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt())
+        .sum::<f64>()
+        / (n - 1) as f64;
+    assert!(
+        step < 3.0 * mean_side,
+        "mean step {step:e} m, cell side {mean_side:e} m"
+    );
+    let mut next = 0u32;
+    for t in &m.cell_vertices {
+        for &v in t {
+            assert!(v <= next, "vertex {v} used before vertex {next}");
+            if v == next {
+                next += 1;
+            }
+        }
+    }
+    assert_eq!(next as usize, m.vertices.len());
+}
