@@ -196,9 +196,6 @@ pub enum TopologyError {
 /// One third (centroids are `(a + b + c) · ⅓`).
 const THIRD: f64 = 1.0 / 3.0;
 
-/// Faces per block of [`PoreMesh::update_face_geometry`].
-const FACE_BLOCK: usize = 16;
-
 fn signed_area(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]))
 }
@@ -520,36 +517,25 @@ impl PoreMesh {
         }
     }
 
-    /// Stage "faces": length, unit normal and mid-point of every face, one pass. Faces go in
-    /// blocks of [`FACE_BLOCK`]: the end points are gathered first, then the square roots and
-    /// divisions of the block run as one branch-free loop the compiler vectorises.
+    /// Stage "faces": length, unit normal and mid-point of every face, one pass.
     pub fn update_face_geometry(&mut self) {
         let vx = &self.vertices;
-        let blocks = self
+        let faces = self
             .face_vertices
-            .chunks(FACE_BLOCK)
-            .zip(self.face_length.chunks_mut(FACE_BLOCK))
-            .zip(self.face_normal.chunks_mut(FACE_BLOCK))
-            .zip(self.face_centroid.chunks_mut(FACE_BLOCK));
-        for (((ends, length), normal), centroid) in blocks {
-            let (mut dx, mut dy) = ([0.0; FACE_BLOCK], [0.0; FACE_BLOCK]);
-            for (k, (&[a, b], centroid)) in ends.iter().zip(centroid.iter_mut()).enumerate() {
-                let (pa, pb) = (vx[a as usize], vx[b as usize]);
-                dx[k] = pb[0] - pa[0];
-                dy[k] = pb[1] - pa[1];
-                *centroid = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])];
-            }
-            let (mut len, mut inv) = ([0.0; FACE_BLOCK], [0.0; FACE_BLOCK]);
-            for k in 0..FACE_BLOCK {
-                len[k] = (dx[k] * dx[k] + dy[k] * dy[k]).sqrt();
-                inv[k] = if len[k] > 0.0 { 1.0 / len[k] } else { 0.0 };
-            }
+            .iter()
+            .zip(&mut self.face_length)
+            .zip(&mut self.face_normal)
+            .zip(&mut self.face_centroid);
+        for (((&[a, b], length), normal), centroid) in faces {
+            let (pa, pb) = (vx[a as usize], vx[b as usize]);
+            let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
+            let len = (dx * dx + dy * dy).sqrt();
+            let inv = if len > 0.0 { 1.0 / len } else { 0.0 };
+            *length = len;
             // Edge (a, b) is traversed counter-clockwise by its first cell, so the outward
             // normal of that cell is the edge direction rotated clockwise.
-            for (k, (length, normal)) in length.iter_mut().zip(normal.iter_mut()).enumerate() {
-                *length = len[k];
-                *normal = [dy[k] * inv[k], -dx[k] * inv[k]];
-            }
+            *normal = [dy * inv, -dx * inv];
+            *centroid = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])];
         }
     }
 
