@@ -272,13 +272,22 @@ pub fn vertex_kinematics_in_frames(
     // The mesh-time position is read only for the few vertices that need it (no anchor, or a
     // constraint), so its cache lines are mostly left alone.
     let x0 = &anchors.reference;
-    let rows = anchors.start.windows(2).zip(&anchors.constraint);
-    for (v, (((row, constraint), x_out), u_out)) in
-        rows.zip(pos.iter_mut()).zip(vel.iter_mut()).enumerate()
+    let ends = anchors.start.get(1..).unwrap_or(&[]);
+    let mut a = anchors.start.first().map_or(0, |&s| s as usize);
+    let rows = ends.iter().zip(&anchors.constraint);
+    for (v, ((&end, constraint), (x_out, u_out))) in
+        rows.zip(pos.iter_mut().zip(vel.iter_mut())).enumerate()
     {
-        let (a, b) = (row[0] as usize, row[1] as usize);
-        let (mut x, mut u) = if b == a + 1 {
-            // The common case: a point on one circle.
+        let b = end as usize;
+        let single = b == a + 1;
+        if single && *constraint == VertexConstraint::Free {
+            // The common case: a free point on one circle.
+            (*x_out, *u_out) =
+                anchor_motion(&frames[anchors.circle[a] as usize], anchors.offset[a]);
+            a = b;
+            continue;
+        }
+        let (mut x, mut u) = if single {
             anchor_motion(&frames[anchors.circle[a] as usize], anchors.offset[a])
         } else {
             let (mut x, mut u) = (x0[v], [0.0; 2]);
@@ -295,6 +304,7 @@ pub fn vertex_kinematics_in_frames(
             }
             (x, u)
         };
+        a = b;
         match *constraint {
             VertexConstraint::Free => {}
             VertexConstraint::OnSide(s) => {
