@@ -1599,6 +1599,9 @@ pub fn mesh_packing(
         }
         new_channels.push((k, [f0, f1], prm.s2s.aperture(ct.normal_stress)));
     }
+    // In the order of their first cell (ties in contact order), so that passes over the
+    // channels gather cell data from nearby memory, as they do for the T2T channels.
+    new_channels.sort_by_key(|&(_, cells, _)| cells[0]);
     for (k, cells, h) in new_channels {
         let (p0, p1) = (
             mesh.cell_centroid[cells[0] as usize],

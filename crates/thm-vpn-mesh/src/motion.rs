@@ -143,8 +143,12 @@ impl CircleMotion<'_> {
         check_finite("velocity", self.velocity.iter().flatten().copied())?;
         check_finite("angular_velocity", self.angular_velocity.iter().copied())?;
         check_finite("radius_rate", self.radius_rate.iter().copied())?;
+        let radius_ok = |r: f64| r.is_finite() && r > 0.0;
+        if self.radius.iter().fold(true, |ok, &r| ok & radius_ok(r)) {
+            return Ok(());
+        }
         for (circle, &value) in self.radius.iter().enumerate() {
-            if !(value.is_finite() && value > 0.0) {
+            if !radius_ok(value) {
                 return Err(MeshError::InvalidRadius { circle, value });
             }
         }
@@ -154,7 +158,15 @@ impl CircleMotion<'_> {
 
 /// The first non-finite value of `values` as a [`MeshError::NonFinite`] (index in the
 /// flattened sequence).
-fn check_finite(what: &'static str, values: impl Iterator<Item = f64>) -> Result<(), MeshError> {
+fn check_finite(
+    what: &'static str,
+    values: impl Iterator<Item = f64> + Clone,
+) -> Result<(), MeshError> {
+    // A scan without early exit first (a straight loop), the search for the index only when
+    // it fails.
+    if values.clone().fold(true, |ok, v| ok & v.is_finite()) {
+        return Ok(());
+    }
     for (index, value) in values.enumerate() {
         if !value.is_finite() {
             return Err(MeshError::NonFinite { what, index, value });
@@ -236,20 +248,29 @@ fn anchor_motion(f: &CircleFrame, o: [f64; 2]) -> ([f64; 2], [f64; 2]) {
     )
 }
 
-/// Checks that the anchor rows are consistent and name circles below `n_circles`.
+/// Checks that the anchor rows are consistent and name circles below `n_circles` (the scans
+/// over all rows have no early exit, so they run as straight vector loops).
 fn check_anchors(anchors: &VertexAnchors, n_circles: usize) -> Result<(), MeshError> {
+    let decreasing = anchors
+        .start
+        .windows(2)
+        .fold(false, |bad, w| bad | (w[0] > w[1]));
     if anchors.start.len() != anchors.len() + 1
         || anchors.start.last().map(|&e| e as usize) != Some(anchors.circle.len())
         || anchors.offset.len() != anchors.circle.len()
         || anchors.reference.len() != anchors.len()
         || anchors.start.first() != Some(&0)
-        || anchors.start.windows(2).any(|w| w[0] > w[1])
+        || decreasing
     {
         return Err(MeshError::LengthMismatch {
             what: "vertex anchor rows",
             expected: anchors.len() + 1,
             got: anchors.start.len(),
         });
+    }
+    let largest = anchors.circle.iter().fold(0u32, |m, &i| m.max(i));
+    if anchors.circle.is_empty() || (largest as usize) < n_circles {
+        return Ok(());
     }
     if let Some(&bad) = anchors.circle.iter().find(|&&i| i as usize >= n_circles) {
         return Err(MeshError::LengthMismatch {
