@@ -269,7 +269,7 @@ fn check_anchors(anchors: &VertexAnchors, n_circles: usize) -> Result<(), MeshEr
         });
     }
     let largest = anchors.circle.iter().fold(0u32, |m, &i| m.max(i));
-    if anchors.circle.is_empty() || (largest as usize) < n_circles {
+    if (largest as usize) < n_circles {
         return Ok(());
     }
     if let Some(&bad) = anchors.circle.iter().find(|&&i| i as usize >= n_circles) {

@@ -248,15 +248,8 @@ struct PointGrid {
 impl PointGrid {
     #[inline(never)]
     fn new(points: &[[f64; 2]]) -> Self {
-        let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
-        let mut finite = true;
-        for p in points {
-            for k in 0..2 {
-                finite &= p[k].is_finite();
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let finite = points.iter().flatten().all(|v| v.is_finite());
+        let (lo, hi) = bounds(points);
         let mut grid = Self {
             lo,
             h: [1.0; 2],
@@ -364,16 +357,21 @@ fn tri_points(m: &PoreMesh, c: usize) -> [[f64; 2]; 3] {
     m.cell_vertices[c].map(|v| m.vertices[v as usize])
 }
 
-/// Lower and upper corners of the bounding box of a triangle.
-fn bounding_box(t: &[[f64; 2]; 3]) -> ([f64; 2], [f64; 2]) {
+/// Lower and upper corners of the bounding box of `points` (`([MAX; 2], [MIN; 2])` for none).
+fn bounds<'a>(points: impl IntoIterator<Item = &'a [f64; 2]>) -> ([f64; 2], [f64; 2]) {
     let (mut a, mut b) = ([f64::MAX; 2], [f64::MIN; 2]);
-    for q in t {
+    for q in points {
         for k in 0..2 {
             a[k] = a[k].min(q[k]);
             b[k] = b[k].max(q[k]);
         }
     }
     (a, b)
+}
+
+/// Lower and upper corners of the bounding box of a triangle.
+fn bounding_box(t: &[[f64; 2]; 3]) -> ([f64; 2], [f64; 2]) {
+    bounds(t)
 }
 
 /// True when `g` lies in the closed counter-clockwise triangle `t`.
@@ -433,13 +431,7 @@ impl CellBins {
     #[inline(never)]
     fn new(new: &PoreMesh, bbox: &[([f64; 2], [f64; 2])]) -> Self {
         let nn = bbox.len();
-        let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
-        for v in &new.vertices {
-            for k in 0..2 {
-                lo[k] = lo[k].min(v[k]);
-                hi[k] = hi[k].max(v[k]);
-            }
-        }
+        let (lo, hi) = bounds(&new.vertices);
         let total_area: f64 = new.cell_area.iter().map(|a| a.abs()).sum();
         let mut h = if nn > 0 {
             (total_area / nn as f64).sqrt() * 1.5
