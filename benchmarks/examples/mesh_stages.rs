@@ -62,6 +62,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pm.mesh.face_vertices.len(),
         pm.mesh.channels.len()
     );
+    // A hash of the geometry after one update from the mesh state: a change of the stage
+    // code that should keep the bits can be checked against the previous binary.
+    let mut pm2 = mesh_packing(&cs, &contacts, &s)?;
+    let mut mm2 = MeshMotion::new();
+    mm2.update(&mut pm2, &motion)?;
+    let m = &pm2.mesh;
+    let bits = m
+        .cell_area
+        .iter()
+        .chain(m.cell_centroid.iter().flatten())
+        .chain(mm2.volume_rate())
+        .chain(&m.face_length)
+        .chain(m.face_normal.iter().flatten())
+        .chain(m.face_centroid.iter().flatten())
+        .chain(&m.channels.length)
+        .chain(&m.channels.aperture)
+        .fold(0xcbf2_9ce4_8422_2325u64, |h, x| {
+            (h ^ x.to_bits()).wrapping_mul(0x0100_0000_01b3)
+        });
+    println!("geometry hash {bits:016x}");
     println!(
         "update {full:.3} ms: validate {valid:.3}, frames {fr:.3}, vertices {vk:.3}, cell rate {cells:.3}, faces {faces:.3}, channels {channels:.3}"
     );

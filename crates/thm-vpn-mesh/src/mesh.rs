@@ -200,6 +200,100 @@ fn signed_area(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]))
 }
 
+/// How many faces or channels the geometry stages treat together (two `f64` lanes of the
+/// baseline x86-64 vector unit).
+const LANES: usize = 2;
+
+/// Length, unit normal and mid-point of the `L` faces `f` (see
+/// [`PoreMesh::update_face_geometry`]).
+#[inline(always)]
+fn face_lanes<const L: usize>(
+    vx: &[[f64; 2]],
+    f: &[[u32; 2]; L],
+    length: &mut [f64; L],
+    normal: &mut [[f64; 2]; L],
+    centroid: &mut [[f64; 2]; L],
+) {
+    let mut pa = [[0.0; 2]; L];
+    let mut pb = [[0.0; 2]; L];
+    for k in 0..L {
+        pa[k] = vx[f[k][0] as usize];
+        pb[k] = vx[f[k][1] as usize];
+    }
+    let dx: [f64; L] = std::array::from_fn(|k| pb[k][0] - pa[k][0]);
+    let dy: [f64; L] = std::array::from_fn(|k| pb[k][1] - pa[k][1]);
+    let len: [f64; L] = std::array::from_fn(|k| (dx[k] * dx[k] + dy[k] * dy[k]).sqrt());
+    let inv: [f64; L] = std::array::from_fn(|k| reciprocal_or_zero(len[k]));
+    for k in 0..L {
+        length[k] = len[k];
+        // Edge (a, b) is traversed counter-clockwise by its first cell, so the outward normal
+        // of that cell is the edge direction rotated clockwise.
+        normal[k] = [dy[k] * inv[k], -dx[k] * inv[k]];
+        centroid[k] = [0.5 * (pa[k][0] + pb[k][0]), 0.5 * (pa[k][1] + pb[k][1])];
+    }
+}
+
+/// `1 / x` for `x > 0`, else 0, without a branch (a mask on the quotient: the stage's
+/// lanes do not wait on an unpredictable jump).
+#[inline(always)]
+fn reciprocal_or_zero(x: f64) -> f64 {
+    std::hint::select_unpredictable(x > 0.0, 1.0 / x, 0.0)
+}
+
+/// What the channel stage reads of the cells and faces.
+struct FaceGeometry<'a> {
+    centroid: &'a [[f64; 2]],
+    normal: &'a [[f64; 2]],
+    length: &'a [f64],
+}
+
+/// Length and, with `Some(γ)`, T2T aperture (A-Eq. 9) of the `L` channels given by their
+/// kind, cells and face (see [`PoreMesh::update_channel_geometry`]).
+#[inline(always)]
+fn channel_lanes<const L: usize>(
+    g: &FaceGeometry<'_>,
+    t2t_reduction_factor: Option<f64>,
+    kind: &[ChannelKind; L],
+    cells: &[[u32; 2]; L],
+    face: &[u32; L],
+    length: &mut [f64; L],
+    aperture: &mut [f64; L],
+) {
+    let mut d = [[0.0; 2]; L];
+    for k in 0..L {
+        let (p0, p1) = (
+            g.centroid[cells[k][0] as usize],
+            g.centroid[cells[k][1] as usize],
+        );
+        d[k] = [p1[0] - p0[0], p1[1] - p0[1]];
+    }
+    let len: [f64; L] = std::array::from_fn(|k| (d[k][0] * d[k][0] + d[k][1] * d[k][1]).sqrt());
+    *length = len;
+    let Some(gamma) = t2t_reduction_factor else {
+        return;
+    };
+    // The face normal and length of the T2T lanes (S2S channels have no face).
+    let mut n = [[0.0; 2]; L];
+    let mut e = [0.0; L];
+    let t2t: [bool; L] = std::array::from_fn(|k| kind[k] == ChannelKind::T2T);
+    for k in 0..L {
+        if t2t[k] {
+            let f = face[k] as usize;
+            n[k] = g.normal[f];
+            e[k] = g.length[f];
+        }
+    }
+    let sin_omega: [f64; L] = std::array::from_fn(|k| {
+        let s = (n[k][0] * d[k][0] + n[k][1] * d[k][1]).abs() / len[k];
+        std::hint::select_unpredictable(len[k] > 0.0, s, 0.0)
+    });
+    for k in 0..L {
+        if t2t[k] {
+            aperture[k] = gamma * e[k] * sin_omega[k];
+        }
+    }
+}
+
 impl PoreMesh {
     /// Builds a mesh from vertices, triangles and cell kinds: orients triangles
     /// counter-clockwise, creates faces (edges) with their two cells, tags boundary faces by
@@ -518,24 +612,34 @@ impl PoreMesh {
     }
 
     /// Stage "faces": length, unit normal and mid-point of every face, one pass.
+    ///
+    /// Faces go [`LANES`] at a time through the same arithmetic, so the square roots and
+    /// divisions (whose throughput bounds this stage) run as packed instructions; every face's
+    /// result is the same bits as computed alone.
     pub fn update_face_geometry(&mut self) {
         let vx = &self.vertices;
-        let faces = self
+        let n = self
             .face_vertices
-            .iter()
-            .zip(&mut self.face_length)
-            .zip(&mut self.face_normal)
-            .zip(&mut self.face_centroid);
-        for (((&[a, b], length), normal), centroid) in faces {
-            let (pa, pb) = (vx[a as usize], vx[b as usize]);
-            let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
-            let len = (dx * dx + dy * dy).sqrt();
-            let inv = if len > 0.0 { 1.0 / len } else { 0.0 };
-            *length = len;
-            // Edge (a, b) is traversed counter-clockwise by its first cell, so the outward
-            // normal of that cell is the edge direction rotated clockwise.
-            *normal = [dy * inv, -dx * inv];
-            *centroid = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])];
+            .len()
+            .min(self.face_length.len())
+            .min(self.face_normal.len())
+            .min(self.face_centroid.len());
+        let (fv, fv_tail) = self.face_vertices[..n].as_chunks::<LANES>();
+        let (length, len_tail) = self.face_length[..n].as_chunks_mut::<LANES>();
+        let (normal, nrm_tail) = self.face_normal[..n].as_chunks_mut::<LANES>();
+        let (centroid, cen_tail) = self.face_centroid[..n].as_chunks_mut::<LANES>();
+        for (((f, l), nn), c) in fv.iter().zip(length).zip(normal).zip(centroid) {
+            face_lanes(vx, f, l, nn, c);
+        }
+        let tail = fv_tail.iter().zip(len_tail).zip(nrm_tail).zip(cen_tail);
+        for (((f, l), nn), c) in tail {
+            face_lanes::<1>(
+                vx,
+                std::array::from_ref(f),
+                std::array::from_mut(l),
+                std::array::from_mut(nn),
+                std::array::from_mut(c),
+            );
         }
     }
 
@@ -544,30 +648,43 @@ impl PoreMesh {
     /// and face stages).
     pub fn update_channel_geometry(&mut self, t2t_reduction_factor: Option<f64>) {
         let ch = &mut self.channels;
-        let (centroid, normal, face_length) =
-            (&self.cell_centroid, &self.face_normal, &self.face_length);
-        for ((((kind, cells), face), length), aperture) in ch
+        let geometry = FaceGeometry {
+            centroid: &self.cell_centroid,
+            normal: &self.face_normal,
+            length: &self.face_length,
+        };
+        let n = ch
             .kind
+            .len()
+            .min(ch.cells.len())
+            .min(ch.face.len())
+            .min(ch.length.len())
+            .min(ch.aperture.len());
+        let (kind, kind_tail) = ch.kind[..n].as_chunks::<LANES>();
+        let (cells, cells_tail) = ch.cells[..n].as_chunks::<LANES>();
+        let (face, face_tail) = ch.face[..n].as_chunks::<LANES>();
+        let (length, length_tail) = ch.length[..n].as_chunks_mut::<LANES>();
+        let (aperture, aperture_tail) = ch.aperture[..n].as_chunks_mut::<LANES>();
+        let groups = kind.iter().zip(cells).zip(face).zip(length).zip(aperture);
+        for ((((k, c), f), l), h) in groups {
+            channel_lanes(&geometry, t2t_reduction_factor, k, c, f, l, h);
+        }
+        let tail = kind_tail
             .iter()
-            .zip(&ch.cells)
-            .zip(&ch.face)
-            .zip(&mut ch.length)
-            .zip(&mut ch.aperture)
-        {
-            let (p0, p1) = (centroid[cells[0] as usize], centroid[cells[1] as usize]);
-            let d = [p1[0] - p0[0], p1[1] - p0[1]];
-            let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
-            *length = len;
-            if let (Some(gamma), ChannelKind::T2T) = (t2t_reduction_factor, kind) {
-                let f = *face as usize;
-                let n = normal[f];
-                let sin_omega = if len > 0.0 {
-                    (n[0] * d[0] + n[1] * d[1]).abs() / len
-                } else {
-                    0.0
-                };
-                *aperture = gamma * face_length[f] * sin_omega;
-            }
+            .zip(cells_tail)
+            .zip(face_tail)
+            .zip(length_tail)
+            .zip(aperture_tail);
+        for ((((k, c), f), l), h) in tail {
+            channel_lanes::<1>(
+                &geometry,
+                t2t_reduction_factor,
+                std::array::from_ref(k),
+                std::array::from_ref(c),
+                std::array::from_ref(f),
+                std::array::from_mut(l),
+                std::array::from_mut(h),
+            );
         }
     }
 
