@@ -95,6 +95,39 @@ impl VertexAnchors {
         self.constraint.is_empty()
     }
 
+    /// True when vertex `v` is free and has exactly one anchor (the common case: a point on an
+    /// arc).
+    pub fn is_simple(&self, v: usize) -> bool {
+        self.start[v + 1] == self.start[v] + 1 && self.constraint[v] == VertexConstraint::Free
+    }
+
+    /// The vertex order that puts the simple vertices ([`Self::is_simple`]) first and the
+    /// others after, each group in its present order: `order[new] = old`.
+    pub fn simple_first_order(&self) -> Vec<u32> {
+        let n = self.len() as u32;
+        let simple = (0..n).filter(|&v| self.is_simple(v as usize));
+        let other = (0..n).filter(|&v| !self.is_simple(v as usize));
+        simple.chain(other).collect()
+    }
+
+    /// The same anchors with the vertices in the order `order` (`order[new] = old`, a
+    /// permutation of `0..len`).
+    pub fn permuted(&self, order: &[u32]) -> Self {
+        let mut out = Self::default();
+        for &v in order {
+            let (a, b) = (
+                self.start[v as usize] as usize,
+                self.start[v as usize + 1] as usize,
+            );
+            out.circle.extend_from_slice(&self.circle[a..b]);
+            out.offset.extend_from_slice(&self.offset[a..b]);
+            out.start.push(out.circle.len() as u32);
+            out.constraint.push(self.constraint[v as usize]);
+            out.reference.push(self.reference[v as usize]);
+        }
+        out
+    }
+
     /// Anchor circles of vertex `v`.
     pub fn circles_of(&self, v: usize) -> &[u32] {
         &self.circle[self.start[v] as usize..self.start[v + 1] as usize]

@@ -160,7 +160,8 @@ fn s2s_aperture_law() {
 
 /// Cells follow a space-filling curve: consecutive cells are neighbours in space (their
 /// centroids lie a few cell sides apart on average, against a third of the box side for a
-/// random order), and vertices are numbered in order of first use by the cells.
+/// random order), and vertices are numbered in order of first use by the cells, the simple
+/// ones (free, one anchor) before the others.
 #[test]
 fn cells_and_vertices_are_in_locality_order() {
     let spec = thm_vpn_mesh::packing::PackingSpec::paper_bar(3);
@@ -180,14 +181,28 @@ fn cells_and_vertices_are_in_locality_order() {
         step < 3.0 * mean_side,
         "mean step {step:e} m, cell side {mean_side:e} m"
     );
-    let mut next = 0u32;
+    // Simple vertices (free, one anchor) come first, the others after; each group is numbered
+    // in order of first use by the cells.
+    let n_simple = (0..m.vertices.len())
+        .take_while(|&v| pm.anchors.is_simple(v))
+        .count();
+    assert!(
+        (n_simple..m.vertices.len()).all(|v| !pm.anchors.is_simple(v)),
+        "a simple vertex after the first other one"
+    );
+    assert!(
+        n_simple > m.vertices.len() / 2,
+        "{n_simple} simple vertices"
+    );
+    let mut next = [0u32, n_simple as u32];
     for t in &m.cell_vertices {
         for &v in t {
-            assert!(v <= next, "vertex {v} used before vertex {next}");
-            if v == next {
-                next += 1;
+            let g = usize::from(v as usize >= n_simple);
+            assert!(v <= next[g], "vertex {v} used before vertex {}", next[g]);
+            if v == next[g] {
+                next[g] += 1;
             }
         }
     }
-    assert_eq!(next as usize, m.vertices.len());
+    assert_eq!(next, [n_simple as u32, m.vertices.len() as u32]);
 }
