@@ -64,9 +64,10 @@
 //!    centroids and the vertices numbered in order of first use, so faces and channels, which
 //!    are created in cell order, follow too: what is near in space is near in memory, and the
 //!    passes over the mesh (geometry update, heat and flow stencils, remap) gather from a few
-//!    cache lines. Free vertices with one anchor (points on an arc) are numbered first, the
-//!    others after, each group in order of first use, so the vertex kinematics runs its common
-//!    case without an unpredictable branch. Cell, vertex and face numbers therefore depend on
+//!    cache lines. Vertices are grouped by their kinematics (free on one circle, as points
+//!    on an arc are, first; then two and three anchors; then those held on a box side), each
+//!    group in order of first use, so the vertex kinematics takes its branches without
+//!    misprediction. Cell, vertex and face numbers therefore depend on
 //!    positions, not on the order of the circles.
 //! 7. **Faces, geometry, channels.** [`PoreMesh::from_triangles`] creates faces, areas,
 //!    centroids, normals, boundary sides and the T2T channels; the mesher adds the S2S channels.

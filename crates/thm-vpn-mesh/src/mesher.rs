@@ -16,8 +16,8 @@
 //!    reachable from the convex hull through fluid triangles of circumradius > α are removed.
 //! 7. Locality order: the triangles are sorted along a Z-order (Morton) curve of their
 //!    centroids ([`locality_order`]), and vertices are numbered in order of first use by the
-//!    sorted triangles, the free one-anchor vertices first
-//!    ([`crate::motion::VertexAnchors::simple_first_order`]). Faces and channels are then created in that order too, so cells,
+//!    sorted triangles within groups of the same kinematics, the free one-anchor vertices
+//!    first ([`crate::motion::VertexAnchors::kinematics_order`]). Faces and channels are then created in that order too, so cells,
 //!    vertices and faces that are close in space are close in memory: every later pass (the
 //!    geometry update, the heat and flow stencils, the remap) gathers from a few cache lines
 //!    instead of from all over the mesh.
@@ -1468,11 +1468,11 @@ pub fn mesh_packing(
         std::iter::once(vkey_first[v as usize]).chain(vkey_extra[lo..hi].iter().map(|e| e.1))
     };
     let anchors = anchors_from_keys(&used_old, keys_of, &vertices, circles, bx);
-    // Free one-anchor vertices (points on an arc, most of them) first, the others after, each
-    // group in order of first use: the vertex kinematics then runs its common case as one
-    // unbroken loop, and cells still read their corners from two streams that both advance
-    // with the cell order.
-    let vertex_order = anchors.simple_first_order();
+    // Vertices grouped by their kinematics (free on one circle, most of them, first; then two
+    // and three anchors; then the constrained ones), each group in order of first use: the
+    // vertex kinematics then takes the same branches for a whole group, and cells still read
+    // their corners from a few streams that all advance with the cell order.
+    let vertex_order = anchors.kinematics_order();
     let mut renumber = vec![0u32; vertex_order.len()];
     for (new, &old) in vertex_order.iter().enumerate() {
         renumber[old as usize] = new as u32;

@@ -95,19 +95,38 @@ impl VertexAnchors {
         self.constraint.is_empty()
     }
 
-    /// True when vertex `v` is free and has exactly one anchor (the common case: a point on an
-    /// arc).
-    pub fn is_simple(&self, v: usize) -> bool {
-        self.start[v + 1] == self.start[v] + 1 && self.constraint[v] == VertexConstraint::Free
+    /// The kinematics group of vertex `v`: its number of anchors (0–3) for a free vertex,
+    /// 4 + that number for a vertex on a box side or fixed. Group 1 (a free point on one
+    /// circle, e.g. on an arc) is the common case.
+    pub fn kinematics_group(&self, v: usize) -> u8 {
+        let n = (self.start[v + 1] - self.start[v]).min(3) as u8;
+        match self.constraint[v] {
+            VertexConstraint::Free => n,
+            _ => 4 + n,
+        }
     }
 
-    /// The vertex order that puts the simple vertices ([`Self::is_simple`]) first and the
-    /// others after, each group in its present order: `order[new] = old`.
-    pub fn simple_first_order(&self) -> Vec<u32> {
-        let n = self.len() as u32;
-        let simple = (0..n).filter(|&v| self.is_simple(v as usize));
-        let other = (0..n).filter(|&v| !self.is_simple(v as usize));
-        simple.chain(other).collect()
+    /// True when vertex `v` is free and has exactly one anchor (group 1).
+    pub fn is_simple(&self, v: usize) -> bool {
+        self.kinematics_group(v) == 1
+    }
+
+    /// The vertex order that sorts the vertices by [`Self::kinematics_group`], group 1 first
+    /// (the simple ones), then 2, 3, 0, 4, …, each group in its present order:
+    /// `order[new] = old`. In that order the branches of the vertex kinematics (how many
+    /// anchors, which constraint) change only at group boundaries.
+    pub fn kinematics_order(&self) -> Vec<u32> {
+        // Group 1 first, group 0 (a free vertex without anchor: none in a mesh of circles)
+        // after the other free ones.
+        let rank = |v: u32| match self.kinematics_group(v as usize) {
+            0 => 3,
+            1 => 0,
+            g @ 2..=3 => g - 1,
+            g => g,
+        };
+        let mut order: Vec<u32> = (0..self.len() as u32).collect();
+        order.sort_by_key(|&v| rank(v));
+        order
     }
 
     /// The same anchors with the vertices in the order `order` (`order[new] = old`, a
@@ -352,7 +371,14 @@ pub fn vertex_kinematics_in_frames(
                     x = [x[0] + y[0], x[1] + y[1]];
                     u = [u[0] + w[0], u[1] + w[1]];
                 }
-                let inv = 1.0 / (b - a) as f64;
+                // 1 / (number of anchors): the same bits as the division, from a table for
+                // the rows the mesher makes.
+                let n = b - a;
+                let inv = match n {
+                    2 => 0.5,
+                    3 => 1.0 / 3.0,
+                    _ => 1.0 / n as f64,
+                };
                 x = [x[0] * inv, x[1] * inv];
                 u = [u[0] * inv, u[1] * inv];
             }

@@ -160,8 +160,8 @@ fn s2s_aperture_law() {
 
 /// Cells follow a space-filling curve: consecutive cells are neighbours in space (their
 /// centroids lie a few cell sides apart on average, against a third of the box side for a
-/// random order), and vertices are numbered in order of first use by the cells, the simple
-/// ones (free, one anchor) before the others.
+/// random order), and vertices are numbered in order of first use by the cells within groups
+/// of the same kinematics.
 #[test]
 fn cells_and_vertices_are_in_locality_order() {
     let spec = thm_vpn_mesh::packing::PackingSpec::paper_bar(3);
@@ -181,28 +181,35 @@ fn cells_and_vertices_are_in_locality_order() {
         step < 3.0 * mean_side,
         "mean step {step:e} m, cell side {mean_side:e} m"
     );
-    // Simple vertices (free, one anchor) come first, the others after; each group is numbered
-    // in order of first use by the cells.
-    let n_simple = (0..m.vertices.len())
-        .take_while(|&v| pm.anchors.is_simple(v))
-        .count();
-    assert!(
-        (n_simple..m.vertices.len()).all(|v| !pm.anchors.is_simple(v)),
-        "a simple vertex after the first other one"
-    );
-    assert!(
-        n_simple > m.vertices.len() / 2,
-        "{n_simple} simple vertices"
-    );
-    let mut next = [0u32, n_simple as u32];
+    // Vertices come in groups of the same kinematics, the simple ones (free, one anchor)
+    // first and most numerous; each group is numbered in order of first use by the cells.
+    let nv = m.vertices.len();
+    let group: Vec<u8> = (0..nv).map(|v| pm.anchors.kinematics_group(v)).collect();
+    assert!(pm.anchors.is_simple(0));
+    let mut first = vec![usize::MAX; 8];
+    for (v, &g) in group.iter().enumerate() {
+        first[usize::from(g)] = first[usize::from(g)].min(v);
+    }
+    // Contiguous groups: as many changes of group along the vertices as groups less one.
+    let changes = group.windows(2).filter(|w| w[0] != w[1]).count();
+    let n_groups = first.iter().filter(|&&f| f != usize::MAX).count();
+    assert_eq!(changes, n_groups - 1, "groups are not contiguous");
+    let n_simple = group.iter().filter(|&&g| g == 1).count();
+    assert!(n_simple > nv / 2, "{n_simple} simple vertices of {nv}");
+    let mut next = first.clone();
     for t in &m.cell_vertices {
         for &v in t {
-            let g = usize::from(v as usize >= n_simple);
-            assert!(v <= next[g], "vertex {v} used before vertex {}", next[g]);
-            if v == next[g] {
+            let g = usize::from(group[v as usize]);
+            assert!(v as usize <= next[g], "vertex {v} used before vertex {}", next[g]);
+            if v as usize == next[g] {
                 next[g] += 1;
             }
         }
     }
-    assert_eq!(next, [n_simple as u32, m.vertices.len() as u32]);
+    for g in 0..8 {
+        if first[g] != usize::MAX {
+            let len = group.iter().filter(|&&h| usize::from(h) == g).count();
+            assert_eq!(next[g], first[g] + len, "group {g}");
+        }
+    }
 }
