@@ -240,15 +240,26 @@ fn reciprocal_or_zero(x: f64) -> f64 {
     std::hint::select_unpredictable(x > 0.0, 1.0 / x, 0.0)
 }
 
+/// T2T aperture of A-Eq. 9, `h = γ · e · sin ω`, for the face from `pa` to `pb` between cells
+/// whose centroids are `d` apart (`len = |d|`): with the unit face normal `n = (e_y, −e_x) / e`,
+/// `e · sin ω = e · |n · d| / |d| = |e × d| / |d|`, which needs neither the normal nor the face
+/// length (0 when the centroids coincide).
+#[inline(always)]
+fn t2t_aperture(gamma: f64, pa: [f64; 2], pb: [f64; 2], d: [f64; 2], len: f64) -> f64 {
+    let e = [pb[0] - pa[0], pb[1] - pa[1]];
+    let h = gamma * (e[0] * d[1] - e[1] * d[0]).abs() / len;
+    std::hint::select_unpredictable(len > 0.0, h, 0.0)
+}
+
 /// What the channel stage reads of the cells and faces.
 struct FaceGeometry<'a> {
     centroid: &'a [[f64; 2]],
-    normal: &'a [[f64; 2]],
-    length: &'a [f64],
+    face_vertices: &'a [[u32; 2]],
+    vertices: &'a [[f64; 2]],
 }
 
-/// Length and, with `Some(γ)`, T2T aperture (A-Eq. 9) of the `L` channels given by their
-/// kind, cells and face (see [`PoreMesh::update_channel_geometry`]).
+/// Length and, with `Some(γ)`, T2T aperture (A-Eq. 9, [`t2t_aperture`]) of the `L` channels
+/// given by their kind, cells and face (see [`PoreMesh::update_channel_geometry`]).
 #[inline(always)]
 fn channel_lanes<const L: usize>(
     g: &FaceGeometry<'_>,
@@ -272,24 +283,12 @@ fn channel_lanes<const L: usize>(
     let Some(gamma) = t2t_reduction_factor else {
         return;
     };
-    // The face normal and length of the T2T lanes (S2S channels have no face).
-    let mut n = [[0.0; 2]; L];
-    let mut e = [0.0; L];
-    let t2t: [bool; L] = std::array::from_fn(|k| kind[k] == ChannelKind::T2T);
+    // The end points of the T2T lanes' faces (S2S channels have no face).
     for k in 0..L {
-        if t2t[k] {
-            let f = face[k] as usize;
-            n[k] = g.normal[f];
-            e[k] = g.length[f];
-        }
-    }
-    let sin_omega: [f64; L] = std::array::from_fn(|k| {
-        let s = (n[k][0] * d[k][0] + n[k][1] * d[k][1]).abs() / len[k];
-        std::hint::select_unpredictable(len[k] > 0.0, s, 0.0)
-    });
-    for k in 0..L {
-        if t2t[k] {
-            aperture[k] = gamma * e[k] * sin_omega[k];
+        if kind[k] == ChannelKind::T2T {
+            let [a, b] = g.face_vertices[face[k] as usize];
+            let (pa, pb) = (g.vertices[a as usize], g.vertices[b as usize]);
+            aperture[k] = t2t_aperture(gamma, pa, pb, d[k], len[k]);
         }
     }
 }
@@ -645,13 +644,15 @@ impl PoreMesh {
 
     /// Stage "channels": the length of every channel (distance between the two cell
     /// centroids) and, with `Some(γ)`, the T2T apertures of A-Eq. 9, one pass (after the cell
-    /// and face stages).
+    /// stage). The aperture is taken from the face's end points ([`t2t_aperture`]), not from
+    /// its normal and length, so the pass reads the small vertex array instead of two large
+    /// per-face ones.
     pub fn update_channel_geometry(&mut self, t2t_reduction_factor: Option<f64>) {
         let ch = &mut self.channels;
         let geometry = FaceGeometry {
             centroid: &self.cell_centroid,
-            normal: &self.face_normal,
-            length: &self.face_length,
+            face_vertices: &self.face_vertices,
+            vertices: &self.vertices,
         };
         let n = ch
             .kind
@@ -758,19 +759,14 @@ impl PoreMesh {
             );
             let d = [p1[0] - p0[0], p1[1] - p0[1]];
             let length = (d[0] * d[0] + d[1] * d[1]).sqrt();
-            // cos(90° − ω) = sin ω = |n · d| / |d|, with n the unit face normal.
-            let n = self.face_normal[f];
-            let sin_omega = if length > 0.0 {
-                (n[0] * d[0] + n[1] * d[1]).abs() / length
-            } else {
-                0.0
-            };
+            let [a, b] = self.face_vertices[f];
+            let (pa, pb) = (self.vertices[a as usize], self.vertices[b as usize]);
             self.channels.kind.push(ChannelKind::T2T);
             self.channels.cells.push([c0, c1]);
             self.channels.length.push(length);
             self.channels
                 .aperture
-                .push(reduction_factor * self.face_length[f] * sin_omega);
+                .push(t2t_aperture(reduction_factor, pa, pb, d, length));
             self.channels.face.push(f as u32);
             self.channels.contact.push(NONE);
         }
@@ -812,6 +808,36 @@ mod tests {
         }
         // Every interior face joins two fluid cells: one T2T channel each.
         assert_eq!(m.channels.len(), m.n_faces() - n_boundary);
+    }
+
+    /// The T2T aperture from the cross product equals A-Eq. 9 written with the unit normal,
+    /// `γ · e · |n · d| / |d|`, to round-off, on a skewed mesh.
+    #[test]
+    fn t2t_aperture_is_eq_9() {
+        let mut m =
+            PoreMesh::structured_rectangle(5, 4, 1.0, 0.8, 1.0, 0.7, |_| CellKind::Fluid).unwrap();
+        for (v, p) in m.vertices.iter_mut().enumerate() {
+            let s = (v as f64 * 0.37).sin();
+            *p = [p[0] + 0.3 * p[1] * p[1] + 0.01 * s, p[1] + 0.05 * p[0] * s];
+        }
+        m.update_geometry();
+        m.update_t2t_apertures(0.7);
+        let mut checked = 0;
+        for c in 0..m.channels.len() {
+            let f = m.channels.face[c] as usize;
+            let [c0, c1] = m.channels.cells[c].map(|i| m.cell_centroid[i as usize]);
+            let d = [c1[0] - c0[0], c1[1] - c0[1]];
+            let n = m.face_normal[f];
+            let expect = 0.7 * m.face_length[f] * (n[0] * d[0] + n[1] * d[1]).abs()
+                / (d[0] * d[0] + d[1] * d[1]).sqrt();
+            let got = m.channels.aperture[c];
+            assert!(
+                (got - expect).abs() <= 1e-15 * expect,
+                "channel {c}: {got} vs {expect}"
+            );
+            checked += 1;
+        }
+        assert!(checked > 20);
     }
 
     #[test]

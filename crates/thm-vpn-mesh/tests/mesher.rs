@@ -200,7 +200,11 @@ fn cells_and_vertices_are_in_locality_order() {
     for t in &m.cell_vertices {
         for &v in t {
             let g = usize::from(group[v as usize]);
-            assert!(v as usize <= next[g], "vertex {v} used before vertex {}", next[g]);
+            assert!(
+                v as usize <= next[g],
+                "vertex {v} used before vertex {}",
+                next[g]
+            );
             if v as usize == next[g] {
                 next[g] += 1;
             }
