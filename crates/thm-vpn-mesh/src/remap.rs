@@ -106,17 +106,15 @@ pub fn triangle_overlap_area(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3]) -> f64 {
     let a = a.map(|p| [p[0] - o[0], p[1] - o[1]]);
     let b = b.map(|p| [p[0] - o[0], p[1] - o[1]]);
     // side_a[k][i]: corner i of `a` against edge k of `b`.
-    let mut side_a = [[0.0f64; 3]; 3];
-    for (k, row) in side_a.iter_mut().enumerate() {
+    let side_a: [[f64; 3]; 3] = std::array::from_fn(|k| {
         let (p0, p1) = (b[k], b[(k + 1) % 3]);
-        *row = [
-            orient(p0, p1, a[0]),
-            orient(p0, p1, a[1]),
-            orient(p0, p1, a[2]),
-        ];
-        if row[0] <= 0.0 && row[1] <= 0.0 && row[2] <= 0.0 {
-            return 0.0;
-        }
+        a.map(|q| orient(p0, p1, q))
+    });
+    // One test for the three separating edges (a jump per edge would be mispredicted for
+    // the neighbours that turn out not to overlap).
+    let outside = side_a.map(|row| row[0] <= 0.0 && row[1] <= 0.0 && row[2] <= 0.0);
+    if outside[0] | outside[1] | outside[2] {
+        return 0.0;
     }
     let keeps = side_a.map(|row| row[0] >= 0.0 && row[1] >= 0.0 && row[2] >= 0.0);
     if keeps[0] && keeps[1] && keeps[2] {
@@ -181,8 +179,12 @@ fn sides<const N: usize>(p: &[[f64; 2]; CLIP_BUFFER], p0: [f64; 2], p1: [f64; 2]
 /// One Sutherland–Hodgman step on the first `N` vertices of `src` with orientations `s`
 /// against a line: the polygon clipped to the inner half-plane (orientation ≥ 0). A vertex
 /// is kept, and the crossing of an edge whose ends lie on different sides is added, while
-/// fewer than [`CLIP_CAPACITY`] vertices have been written (a vertex is written whether or
-/// not it is kept, and kept by advancing the count).
+/// fewer than [`CLIP_CAPACITY`] vertices have been written.
+///
+/// Without a branch: every vertex and every edge's crossing point is written to the next
+/// free slot and kept by advancing the count (which side a vertex is on is as good as random,
+/// so a jump on it would be mispredicted about every other time). A crossing that is not kept
+/// may be computed from a zero denominator; its slot is overwritten or lies past the count.
 #[inline(always)]
 fn clip_by_edge<const N: usize>(src: &[[f64; 2]; CLIP_BUFFER], s: &[f64; N]) -> Polygon {
     let mut dst = Polygon {
@@ -195,12 +197,11 @@ fn clip_by_edge<const N: usize>(src: &[[f64; 2]; CLIP_BUFFER], s: &[f64; N]) -> 
         let (su, sv) = (s[i], s[j]);
         dst.p[m] = src[i];
         m += usize::from(su >= 0.0 && m < CLIP_CAPACITY);
-        if (su >= 0.0) != (sv >= 0.0) && m < CLIP_CAPACITY {
-            let t = su / (su - sv);
-            let (u, v) = (src[i], src[j]);
-            dst.p[m] = [u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1])];
-            m += 1;
-        }
+        let crosses = (su >= 0.0) != (sv >= 0.0) && m < CLIP_CAPACITY;
+        let t = su / (su - sv);
+        let (u, v) = (src[i], src[j]);
+        dst.p[m] = [u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1])];
+        m += usize::from(crosses);
     }
     dst.n = m;
     dst
@@ -380,8 +381,11 @@ fn holds(t: &[[f64; 2]; 3], g: [f64; 2]) -> bool {
     orient(t[0], t[1], g) >= 0.0 && orient(t[1], t[2], g) >= 0.0 && orient(t[2], t[0], g) >= 0.0
 }
 
-/// Longest walk [`walk_to`] takes before it gives up (the bin grid answers then).
-const WALK_STEPS: usize = 64;
+/// Longest walk [`walk_to`] takes before it gives up (the bin grid answers then). Most walks
+/// from the previous seed take a few steps; at the jumps of the space-filling curve (a few
+/// dozen in a mesh) they take up to a few hundred, still far cheaper than building the bin
+/// grid (as much as some 10⁵ steps).
+const WALK_STEPS: usize = 2048;
 
 /// The cell of `tri` holding `g`, found by a visibility walk from cell `from` over
 /// `adjacency` (`adjacency[c][k]` is the cell across the edge from corner `k` to `k + 1`):
