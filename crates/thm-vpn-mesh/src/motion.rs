@@ -98,11 +98,17 @@ impl VertexAnchors {
     /// The kinematics group of vertex `v`: its number of anchors (0–3) for a free vertex,
     /// 4 + that number for a vertex on a box side or fixed. Group 1 (a free point on one
     /// circle, e.g. on an arc) is the common case.
+    ///
+    /// A vertex beyond the rows, or a malformed row, counts as having no anchor (the checks
+    /// of [`crate::motion::vertex_kinematics`] reject such anchors).
     pub fn kinematics_group(&self, v: usize) -> u8 {
-        let n = (self.start[v + 1] - self.start[v]).min(3) as u8;
-        match self.constraint[v] {
-            VertexConstraint::Free => n,
-            _ => 4 + n,
+        let n = match (self.start.get(v), self.start.get(v + 1)) {
+            (Some(&a), Some(&b)) => b.saturating_sub(a).min(3) as u8,
+            _ => 0,
+        };
+        match self.constraint.get(v) {
+            Some(VertexConstraint::OnSide(_) | VertexConstraint::Fixed) => 4 + n,
+            _ => n,
         }
     }
 
@@ -130,8 +136,8 @@ impl VertexAnchors {
     }
 
     /// The same anchors with the vertices in the order `order` (`order[new] = old`, a
-    /// permutation of `0..len`).
-    pub fn permuted(&self, order: &[u32]) -> Self {
+    /// permutation of `0..len` of well-formed rows, as the mesher makes them).
+    pub(crate) fn permuted(&self, order: &[u32]) -> Self {
         let mut out = Self::default();
         for &v in order {
             let (a, b) = (

@@ -438,6 +438,9 @@ fn broken_anchor_rows_are_a_typed_error() {
         mm.update(&mut bad, &st.motion()),
         Err(MeshError::LengthMismatch { .. })
     ));
+    // Decreasing rows and vertices beyond the rows have no anchor, without a panic.
+    assert!(matches!(bad.anchors.kinematics_group(1), 0 | 4));
+    assert_eq!(bad.anchors.kinematics_group(bad.anchors.len() + 5), 0);
     let mut bad = pm;
     bad.anchors.circle[0] = cs.len() as u32;
     assert!(matches!(
