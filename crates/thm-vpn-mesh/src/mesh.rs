@@ -233,8 +233,8 @@ fn face_lanes<const L: usize>(
     }
 }
 
-/// `1 / x` for `x > 0`, else 0, without a branch (a mask on the quotient: the stage's
-/// lanes do not wait on an unpredictable jump).
+/// `1 / x` for `x > 0`, else 0, as a selection rather than a jump (the quotient is always
+/// computed; the test on `x` does not stall the stage).
 #[inline(always)]
 fn reciprocal_or_zero(x: f64) -> f64 {
     std::hint::select_unpredictable(x > 0.0, 1.0 / x, 0.0)
@@ -612,9 +612,10 @@ impl PoreMesh {
 
     /// Stage "faces": length, unit normal and mid-point of every face, one pass.
     ///
-    /// Faces go [`LANES`] at a time through the same arithmetic, so the square roots and
-    /// divisions (whose throughput bounds this stage) run as packed instructions; every face's
-    /// result is the same bits as computed alone.
+    /// Faces go [`LANES`] at a time through the same arithmetic, so the square roots run as
+    /// one packed instruction per pair (the compiler keeps the divisions scalar; square roots
+    /// and divisions share the divider that bounds this stage); every face's result is the
+    /// same bits as computed alone.
     pub fn update_face_geometry(&mut self) {
         let vx = &self.vertices;
         let n = self

@@ -112,11 +112,6 @@ impl VertexAnchors {
         }
     }
 
-    /// True when vertex `v` is free and has exactly one anchor (group 1).
-    pub fn is_simple(&self, v: usize) -> bool {
-        self.kinematics_group(v) == 1
-    }
-
     /// The vertex order that sorts the vertices by [`Self::kinematics_group`], group 1 first
     /// (the simple ones), then 2, 3, 0, 4, …, each group in its present order:
     /// `order[new] = old`. In that order the branches of the vertex kinematics (how many

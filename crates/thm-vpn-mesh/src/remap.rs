@@ -370,11 +370,6 @@ fn bounds<'a>(points: impl IntoIterator<Item = &'a [f64; 2]>) -> ([f64; 2], [f64
     (a, b)
 }
 
-/// Lower and upper corners of the bounding box of a triangle.
-fn bounding_box(t: &[[f64; 2]; 3]) -> ([f64; 2], [f64; 2]) {
-    bounds(t)
-}
-
 /// True when `g` lies in the closed counter-clockwise triangle `t`.
 #[inline(always)]
 fn holds(t: &[[f64; 2]; 3], g: [f64; 2]) -> bool {
@@ -536,7 +531,7 @@ impl RemapOperator {
         // Packed corner coordinates and bounding boxes of the new cells (one contiguous
         // record per cell).
         let new_tri: Vec<[[f64; 2]; 3]> = (0..nn).map(|c| tri_points(new, c)).collect();
-        let new_bbox: Vec<([f64; 2], [f64; 2])> = new_tri.iter().map(bounding_box).collect();
+        let new_bbox: Vec<([f64; 2], [f64; 2])> = new_tri.iter().map(bounds).collect();
         let mut new_adjacency = vec![[NONE; 3]; nn];
         for (c, faces) in new.cell_faces.iter().enumerate() {
             for k in 0..3 {
@@ -587,7 +582,7 @@ impl RemapOperator {
                     bins.get_or_insert_with(|| CellBins::new(new, &new_bbox))
                         .holding(&new_tri, g)
                 });
-                let (a, b) = bounding_box(&p);
+                let (a, b) = bounds(&p);
                 match seed {
                     Some(s) => {
                         previous_seed = s;
