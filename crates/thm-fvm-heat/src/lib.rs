@@ -51,9 +51,14 @@
 //!
 //! A step is the fixed sequence `prepare` → `stability_limit` → (`face_values` → `gradients`
 //! (gradient and limiter) → `face_heat` → `channel_heat` → `advance`) per sub-step; each stage
-//! is a public method testable alone. Face and channel heat rates are computed once per face/channel and gathered
-//! per cell in a fixed order, so energy is conserved to round-off and 1-thread and N-thread
-//! runs give identical bits.
+//! is a public method testable alone. [`HeatStepper::step`] runs it with one pass fewer: the
+//! heat rates of a sub-step do not depend on its length, so the first sub-step's face pass
+//! also stores the face conductances of the stability limit, and one pass over the cells
+//! then gives the limit and the net heat to apply (`face_heat_and_conductances` →
+//! `channel_heat` → `net_heat_and_stability_limit` → `apply_net_heat`); the result has the
+//! same bits as the plain sequence (property test). Face and channel heat rates are computed
+//! once per face/channel and gathered per cell in a fixed order, so energy is conserved to
+//! round-off and 1-thread and N-thread runs give identical bits.
 //!
 //! ## What it does not do
 //!

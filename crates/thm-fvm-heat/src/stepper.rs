@@ -5,7 +5,13 @@
 //! [`HeatStepper::stability_limit`], then, for each sub-step: [`HeatStepper::face_values`]
 //! (interface and boundary faces only) → [`HeatStepper::gradients`] (gradient and limiter in
 //! one pass over the cells) → [`HeatStepper::face_heat`] → [`HeatStepper::channel_heat`] →
-//! [`HeatStepper::advance`] (with the finiteness check). Conductances of faces inside a
+//! [`HeatStepper::advance`] (with the finiteness check). [`HeatStepper::step`] folds the
+//! stability limit into the first sub-step: its face pass
+//! ([`HeatStepper::face_heat_and_conductances`]) also stores each face's conductance, and
+//! one pass over the cells ([`HeatStepper::net_heat_and_stability_limit`]) sums both the net
+//! heat and the conductances, so the limit, hence the sub-step length, is known before
+//! [`HeatStepper::apply_net_heat`] updates the temperatures: one pass over the mesh fewer,
+//! the same bits. Conductances of faces inside a
 //! medium are not stored: λ_f is formed from the two cell conductivities where a face is
 //! used, from the geometry cached in [`HeatGeometry`]. Every stage is a parallel map over
 //! cells, faces or channels whose results are gathered per cell in a fixed order, so
@@ -80,11 +86,24 @@ pub struct HeatStepper {
     pub(crate) interface_law: Vec<InterfaceLaw>,
     // Per value face (interfaces and boundaries), in the geometry's `value_faces` order.
     face_value: Vec<f64>,
-    // Per face.
+    // Per face: heat into the first cell, and the conductance in the stability limit.
     face_heat: Vec<f64>,
+    face_conductance: Vec<f64>,
     // Per channel.
     pub(crate) channel_conductance: Vec<f64>,
     channel_heat: Vec<f64>,
+    // Per cell: net heat inflow of the first sub-step [W].
+    net_heat: Vec<f64>,
+}
+
+fn non_finite_temperature(state: &HeatState, cell: usize, time: f64) -> HeatError {
+    HeatError::NonFinite {
+        quantity: "temperature",
+        cell,
+        step: state.steps,
+        time,
+        value: state.temperature[cell],
+    }
 }
 
 fn check_dt(dt: f64) -> Result<(), HeatError> {
@@ -119,7 +138,12 @@ impl HeatStepper {
     ) -> Result<StepReport, HeatError> {
         check_dt(dt)?;
         self.prepare(model, geometry, mesh, input, state)?;
-        let limit = self.stability_limit(model, geometry, mesh, input);
+        let t0 = state.time;
+        // The heat rates of the first sub-step do not depend on its length, and the face pass
+        // that computes them also gives the face conductances of the stability limit: one pass
+        // over the mesh yields both, and the limit then sets the length.
+        self.heat_rates(model, geometry, mesh, input, &state.temperature, t0, true);
+        let limit = self.net_heat_and_stability_limit(geometry, mesh, input);
         let allowed = model.stability_safety * limit;
         let substeps = if allowed.is_finite() {
             ((dt / allowed).ceil() as usize).max(1)
@@ -127,8 +151,12 @@ impl HeatStepper {
             1
         };
         let h = dt / substeps as f64;
-        let t0 = state.time;
-        for k in 0..substeps {
+        if let Some(c) = self.apply_net_heat(&mut state.temperature, h) {
+            return Err(non_finite_temperature(state, c, t0));
+        }
+        state.time = t0 + h;
+        state.steps += 1;
+        for k in 1..substeps {
             let t = t0 + k as f64 * h;
             self.substep(model, geometry, mesh, input, state, t, h)?;
             state.time = t0 + (k + 1) as f64 * h;
@@ -169,20 +197,34 @@ impl HeatStepper {
         t: f64,
         h: f64,
     ) -> Result<(), HeatError> {
-        self.face_values(model, geometry, mesh, &state.temperature, t);
-        self.gradients(model, geometry, mesh, &state.temperature);
-        self.face_heat(model, geometry, mesh, input, &state.temperature, t);
-        self.channel_heat(model, geometry, mesh, input, &state.temperature);
+        self.heat_rates(model, geometry, mesh, input, &state.temperature, t, false);
         if let Some(c) = self.advance(geometry, mesh, &mut state.temperature, h) {
-            return Err(HeatError::NonFinite {
-                quantity: "temperature",
-                cell: c,
-                step: state.steps,
-                time: t,
-                value: state.temperature[c],
-            });
+            return Err(non_finite_temperature(state, c, t));
         }
         Ok(())
+    }
+
+    /// Stages 1–4 at time `t`: face values, gradients and limiters, face heat (with the
+    /// stability conductances where `conductances`), channel heat.
+    #[allow(clippy::too_many_arguments)]
+    fn heat_rates(
+        &mut self,
+        model: &HeatModel,
+        geometry: &HeatGeometry,
+        mesh: &PoreMesh,
+        input: &FlowInput,
+        temp: &[f64],
+        t: f64,
+        conductances: bool,
+    ) {
+        self.face_values(model, geometry, mesh, temp, t);
+        self.gradients(model, geometry, mesh, temp);
+        if conductances {
+            self.face_heat_and_conductances(model, geometry, mesh, input, temp, t);
+        } else {
+            self.face_heat(model, geometry, mesh, input, temp, t);
+        }
+        self.channel_heat(model, geometry, mesh, input, temp);
     }
 
     /// Stage 0: checks the geometry against the mesh, the state and the input, then computes
@@ -236,6 +278,8 @@ impl HeatStepper {
         self.limiter.resize(n, 1.0);
         self.face_value.resize(geometry.value_faces.len(), 0.0);
         self.face_heat.resize(nf, 0.0);
+        self.face_conductance.resize(nf, 0.0);
+        self.net_heat.resize(n, 0.0);
         self.channel_heat.resize(mesh.channels.len(), 0.0);
         Ok(())
     }
@@ -403,94 +447,161 @@ impl HeatStepper {
 
     /// The explicit stability limit [s] with the coefficients of the last [`Self::prepare`]
     /// (without the safety factor): min over cells of C_i / (Σ conductances + 3 Σ outflow
-    /// ṁ c_p), the conductances of faces inside a medium formed from the cell conductivities.
+    /// ṁ c_p), with the face conductances of [`face_stability_conductance`]. [`Self::step`]
+    /// gets the same number from the face pass of its first sub-step
+    /// ([`Self::face_heat_and_conductances`], [`Self::net_heat_and_stability_limit`]); this
+    /// stage computes it alone.
     pub fn stability_limit(
-        &self,
+        &mut self,
         model: &HeatModel,
         geometry: &HeatGeometry,
         mesh: &PoreMesh,
         input: &FlowInput,
     ) -> f64 {
-        let start = &geometry.cell_channel_start;
+        self.face_conductance.resize(mesh.n_faces(), 0.0);
         let lam = &self.conductivity;
-        let n = mesh.n_cells();
-        (0..n.div_ceil(GRAIN))
+        let cp = &self.specific_heat;
+        let law = &self.interface_law;
+        (
+            self.face_conductance.par_chunks_mut(GRAIN),
+            mesh.face_cells.par_chunks(GRAIN),
+            geometry.face.par_chunks(GRAIN),
+            input.boundary_mass_flux.par_chunks(GRAIN),
+        )
             .into_par_iter()
-            .map(|chunk| {
-                let (lo, hi) = (chunk * GRAIN, ((chunk + 1) * GRAIN).min(n));
-                let mut best: Option<f64> = None;
-                for (i, (((((faces, &flag), source), &cap), &cp), &lc)) in mesh.cell_faces[lo..hi]
-                    .iter()
-                    .zip(&geometry.cell_flags[lo..hi])
-                    .zip(&geometry.stencil_source[lo..hi])
-                    .zip(&self.capacity[lo..hi])
-                    .zip(&self.specific_heat[lo..hi])
-                    .zip(&lam[lo..hi])
-                    .enumerate()
+            .for_each(|(conductance, cells, faces, outflow)| {
+                for (((g, &[c0, c1]), geo), &m) in
+                    conductance.iter_mut().zip(cells).zip(faces).zip(outflow)
                 {
-                    let c = lo + i;
-                    let mut s = 0.0;
+                    *g = face_stability_conductance(
+                        model,
+                        geometry,
+                        law,
+                        geo,
+                        lam,
+                        cp,
+                        c0 as usize,
+                        c1,
+                        m,
+                    );
+                }
+            });
+        self.cell_sums::<false>(geometry, mesh, input)
+    }
+
+    /// After [`Self::face_heat_and_conductances`] and [`Self::channel_heat`]: the net heat
+    /// inflow of every cell (kept for [`Self::apply_net_heat`]) and, in the same pass over the
+    /// cells, the stability limit of [`Self::stability_limit`] (the same bits).
+    pub fn net_heat_and_stability_limit(
+        &mut self,
+        geometry: &HeatGeometry,
+        mesh: &PoreMesh,
+        input: &FlowInput,
+    ) -> f64 {
+        self.cell_sums::<true>(geometry, mesh, input)
+    }
+
+    /// T ← T + h (net heat) / C with the net heat of [`Self::net_heat_and_stability_limit`]
+    /// (the same update as [`Self::advance`]). Returns the first cell whose new temperature is
+    /// not finite.
+    pub fn apply_net_heat(&self, temp: &mut [f64], h: f64) -> Option<usize> {
+        (
+            temp.par_chunks_mut(GRAIN),
+            self.net_heat.par_chunks(GRAIN),
+            self.capacity.par_chunks(GRAIN),
+        )
+            .into_par_iter()
+            .enumerate()
+            .map(|(chunk, (temp, net, cap))| {
+                let mut bad = None;
+                for (i, ((t, &s), &cap)) in temp.iter_mut().zip(net).zip(cap).enumerate() {
+                    *t += h * s / cap;
+                    if bad.is_none() && !t.is_finite() {
+                        bad = Some(chunk * GRAIN + i);
+                    }
+                }
+                bad
+            })
+            .reduce(|| None, |a, b| a.or(b))
+    }
+
+    /// One pass over the cells: the stability limit from the face conductances (stored by
+    /// the last face pass) and the channels, and, with `HEAT`, each cell's net heat inflow
+    /// from the face and channel heat, gathered in the order of [`Self::advance`].
+    fn cell_sums<const HEAT: bool>(
+        &mut self,
+        geometry: &HeatGeometry,
+        mesh: &PoreMesh,
+        input: &FlowInput,
+    ) -> f64 {
+        let n = mesh.n_cells();
+        self.net_heat.resize(n, 0.0);
+        let start = &geometry.cell_channel_start;
+        let cell_channel = &geometry.cell_channel;
+        let (qf, qc, gf, gc) = (
+            &self.face_heat,
+            &self.channel_heat,
+            &self.face_conductance,
+            &self.channel_conductance,
+        );
+        let (cap, cp) = (&self.capacity, &self.specific_heat);
+        let flux = &input.channel_mass_flux;
+        (
+            self.net_heat.par_chunks_mut(GRAIN),
+            mesh.cell_faces.par_chunks(GRAIN),
+            geometry.cell_flags.par_chunks(GRAIN),
+        )
+            .into_par_iter()
+            .enumerate()
+            .map(|(chunk, (net, faces, flags))| {
+                let lo = chunk * GRAIN;
+                let start = &start[lo..=lo + net.len()];
+                let (cap, cp) = (&cap[lo..lo + net.len()], &cp[lo..lo + net.len()]);
+                let mut best = f64::INFINITY;
+                for (i, ((net, faces), &flag)) in net.iter_mut().zip(faces).zip(flags).enumerate() {
+                    let (mut heat, mut conductance) = (0.0, 0.0);
                     for (j, &f) in faces.iter().enumerate() {
                         let f = f as usize;
-                        s += match geometry.face[f] {
-                            FaceGeometry::Diffusive {
-                                conductance,
-                                d0,
-                                d1,
-                                ..
-                            } => {
-                                let other = lam[source[j] as usize];
-                                let lf = if flag & (CELL_FIRST << j) != 0 {
-                                    face_conductivity(lc, other, d0, d1)
-                                } else {
-                                    face_conductivity(other, lc, d0, d1)
-                                };
-                                lf * conductance
+                        conductance += gf[f];
+                        if HEAT {
+                            if flag & (CELL_FIRST << j) != 0 {
+                                heat += qf[f];
+                            } else {
+                                heat -= qf[f];
                             }
-                            FaceGeometry::Interface { index, .. } => {
-                                self.interface_law[index as usize].g
-                            }
-                            FaceGeometry::Boundary { slot } => {
-                                let bf = &geometry.boundary[slot as usize];
-                                let m = input.boundary_mass_flux[f];
-                                let adv = if m > 0.0 { 2.0 * m * cp } else { 0.0 };
-                                adv + boundary_conductance(
-                                    &model.sides[bf.side as usize],
-                                    lc,
-                                    bf.normal_distance,
-                                    bf.area,
-                                )
-                            }
-                        };
-                    }
-                    for &(k, second) in
-                        &geometry.cell_channel[start[c] as usize..start[c + 1] as usize]
-                    {
-                        let k = k as usize;
-                        s += self.channel_conductance[k];
-                        let m = input.channel_mass_flux[k];
-                        let out = if second { -m } else { m };
-                        if out > 0.0 {
-                            s += ADVECTIVE_FACTOR * out * cp;
                         }
                     }
-                    let limit = if s > 0.0 { cap / s } else { f64::INFINITY };
-                    best = Some(match best {
-                        Some(b) if b.total_cmp(&limit).is_le() => b,
-                        _ => limit,
-                    });
+                    for &(k, second) in &cell_channel[start[i] as usize..start[i + 1] as usize] {
+                        let k = k as usize;
+                        if HEAT {
+                            if second {
+                                heat += qc[k];
+                            } else {
+                                heat -= qc[k];
+                            }
+                        }
+                        conductance += gc[k];
+                        let m = flux[k];
+                        let out = if second { -m } else { m };
+                        if out > 0.0 {
+                            conductance += ADVECTIVE_FACTOR * out * cp[i];
+                        }
+                    }
+                    if HEAT {
+                        *net = heat;
+                    }
+                    // Capacities and conductances of checked input are finite and >= 0: the
+                    // limit is a number or +∞, and `min` is exact and order-independent.
+                    let limit = if conductance > 0.0 {
+                        cap[i] / conductance
+                    } else {
+                        f64::INFINITY
+                    };
+                    best = best.min(limit);
                 }
                 best
             })
-            .reduce(
-                || None,
-                |a, b| match (a, b) {
-                    (Some(x), Some(y)) => Some(if x.total_cmp(&y).is_le() { x } else { y }),
-                    (x, None) => x,
-                    (None, y) => y,
-                },
-            )
-            .unwrap_or(f64::INFINITY)
+            .reduce(|| f64::INFINITY, f64::min)
     }
 
     /// Stage 1: the temperatures of the faces whose value enters the gradients and limiters
@@ -673,6 +784,32 @@ impl HeatStepper {
         temp: &[f64],
         t: f64,
     ) {
+        self.face_pass::<false>(model, geometry, mesh, input, temp, t);
+    }
+
+    /// Stage 3 of the first sub-step of [`Self::step`]: [`Self::face_heat`] and, in the same
+    /// pass, each face's conductance in the stability limit ([`face_stability_conductance`]).
+    pub fn face_heat_and_conductances(
+        &mut self,
+        model: &HeatModel,
+        geometry: &HeatGeometry,
+        mesh: &PoreMesh,
+        input: &FlowInput,
+        temp: &[f64],
+        t: f64,
+    ) {
+        self.face_pass::<true>(model, geometry, mesh, input, temp, t);
+    }
+
+    fn face_pass<const CONDUCTANCE: bool>(
+        &mut self,
+        model: &HeatModel,
+        geometry: &HeatGeometry,
+        mesh: &PoreMesh,
+        input: &FlowInput,
+        temp: &[f64],
+        t: f64,
+    ) {
         let grad = &self.gradient;
         let psi = &self.limiter;
         let cp = &self.specific_heat;
@@ -684,19 +821,35 @@ impl HeatStepper {
             SideCondition::Temperature(s) => s.at(t),
             _ => 0.0,
         });
+        // Written only with `CONDUCTANCE`; sized here so that the zip covers every face.
+        self.face_conductance.resize(mesh.n_faces(), 0.0);
         (
             self.face_heat.par_chunks_mut(GRAIN),
+            self.face_conductance.par_chunks_mut(GRAIN),
             mesh.face_cells.par_chunks(GRAIN),
             geometry.face.par_chunks(GRAIN),
         )
             .into_par_iter()
             .enumerate()
-            .for_each(|(chunk, (heat, cells, faces))| {
+            .for_each(|(chunk, (heat, conductance, cells, faces))| {
                 for (i, ((q, &[c0, c1]), geo)) in heat.iter_mut().zip(cells).zip(faces).enumerate()
                 {
                     let f = chunk * GRAIN + i;
                     let c0 = c0 as usize;
                     let t0 = temp[c0];
+                    if CONDUCTANCE {
+                        conductance[i] = face_stability_conductance(
+                            model,
+                            geometry,
+                            law,
+                            geo,
+                            lam,
+                            cp,
+                            c0,
+                            c1,
+                            input.boundary_mass_flux[f],
+                        );
+                    }
                     *q = match *geo {
                         FaceGeometry::Diffusive {
                             conductance,
@@ -888,6 +1041,44 @@ impl HeatStepper {
     /// Heat capacity C_i = V_i (ρ c)_i of each cell [J/K] from the last [`Self::prepare`].
     pub fn heat_capacity(&self) -> &[f64] {
         &self.capacity
+    }
+}
+
+/// Conductance [W/K] of one face in the stability limit: λ_f |A| / (ds n·e_s) inside a
+/// medium (A-Eq. 47's primary term), the series conductance of a fluid–solid interface, and
+/// at an outer boundary the conductance of its case plus 2 ṁ c_p where fluid flows out (`m`,
+/// the face's boundary mass flux, positive outward).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn face_stability_conductance(
+    model: &HeatModel,
+    geometry: &HeatGeometry,
+    law: &[InterfaceLaw],
+    geo: &FaceGeometry,
+    lam: &[f64],
+    cp: &[f64],
+    c0: usize,
+    c1: u32,
+    m: f64,
+) -> f64 {
+    match *geo {
+        FaceGeometry::Diffusive {
+            conductance,
+            d0,
+            d1,
+            ..
+        } => face_conductivity(lam[c0], lam[c1 as usize], d0, d1) * conductance,
+        FaceGeometry::Interface { index, .. } => law[index as usize].g,
+        FaceGeometry::Boundary { slot } => {
+            let bf = &geometry.boundary[slot as usize];
+            let adv = if m > 0.0 { 2.0 * m * cp[c0] } else { 0.0 };
+            adv + boundary_conductance(
+                &model.sides[bf.side as usize],
+                lam[c0],
+                bf.normal_distance,
+                bf.area,
+            )
+        }
     }
 }
 

@@ -54,6 +54,35 @@ proptest! {
         prop_assert!(report.substeps >= 1);
     }
 
+    /// `step` takes its stability limit from the face pass of its first sub-step and applies
+    /// that sub-step's net heat after: the same bits as the plain stage sequence (prepare,
+    /// stability limit alone, then face values → gradients → face heat → channel heat →
+    /// advance per sub-step), for the limit and for the temperatures after several sub-steps.
+    #[test]
+    fn fused_first_substep_equals_the_stage_sequence(seed in any::<u64>(), nx in 2usize..7, ny in 2usize..7) {
+        let (mesh, model, input, state) = setup(seed, nx, ny, 2e-4);
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
+        let mut plain = HeatStepper::new();
+        let limit = plain.stable_time_step(&model, &geometry, &mesh, &input, &state).unwrap();
+        prop_assert!(limit.is_finite() && limit > 0.0);
+        let dt = 3.5 * limit;
+        let mut fused = state.clone();
+        let report = HeatStepper::new().step(&model, &geometry, &mesh, &input, &mut fused, dt).unwrap();
+        prop_assert_eq!(report.stability_limit.to_bits(), limit.to_bits());
+        prop_assert!(report.substeps >= 4);
+        let mut t = state.temperature.clone();
+        for k in 0..report.substeps {
+            let time = k as f64 * report.substep;
+            plain.face_values(&model, &geometry, &mesh, &t, time);
+            plain.gradients(&model, &geometry, &mesh, &t);
+            plain.face_heat(&model, &geometry, &mesh, &input, &t, time);
+            plain.channel_heat(&model, &geometry, &mesh, &input, &t);
+            prop_assert!(plain.advance(&geometry, &mesh, &mut t, report.substep).is_none());
+        }
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        prop_assert_eq!(bits(&fused.temperature), bits(&t));
+    }
+
     /// Pure advection (λ = 0, uniform single-phase fluid, divergence-free channel fluxes) on
     /// random meshes: fluid temperatures stay within their initial range (the Barth–Jespersen
     /// limiter and the advective stability factor keep the scheme local-extremum diminishing).
