@@ -1049,7 +1049,7 @@ impl HeatStepper {
 /// at an outer boundary the conductance of its case plus 2 ṁ c_p where fluid flows out (`m`,
 /// the face's boundary mass flux, positive outward).
 #[allow(clippy::too_many_arguments)]
-#[inline]
+#[inline(always)]
 fn face_stability_conductance(
     model: &HeatModel,
     geometry: &HeatGeometry,
