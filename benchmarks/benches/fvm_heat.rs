@@ -1,8 +1,9 @@
 //! One heat step on 100 000 fluid + 100 000 solid cells (structured triangulation, 2 × 2-square
 //! blocks alternating fluid and solid, uniform flow through the T2T channels), on 1 and 2
 //! threads: the explicit sub-step alone, a whole outer step of one sub-step (per-step
-//! coefficients prepared + sub-step, with the mesh geometry cached in a `HeatGeometry`), the
-//! geometry itself (built once per remesh; refreshed after the vertices move), and the
+//! coefficients prepared + sub-step, the stability limit taken from the sub-step's face pass,
+//! with the mesh geometry cached in a `HeatGeometry`), the geometry itself (built once per
+//! remesh; refreshed after the vertices move), every stage alone on one thread, and the
 //! backward-Euler conduction step (assembly + sparse Cholesky).
 //!
 //! Run: `cargo bench -p thm-benchmarks --bench fvm_heat`.
@@ -150,6 +151,22 @@ fn bench(c: &mut Criterion) {
     });
     group.bench_function("channel_heat", |b| {
         b.iter(|| pool.install(|| stepper.channel_heat(&model, g, &mesh, &input, &s.temperature)))
+    });
+    group.bench_function("face_heat_and_conductances", |b| {
+        b.iter(|| {
+            pool.install(|| {
+                stepper.face_heat_and_conductances(&model, g, &mesh, &input, &s.temperature, 0.0)
+            })
+        })
+    });
+    group.bench_function("net_heat_and_stability_limit", |b| {
+        b.iter(|| pool.install(|| stepper.net_heat_and_stability_limit(g, &mesh, &input)))
+    });
+    group.bench_function("apply_net_heat", |b| {
+        b.iter(|| {
+            pool.install(|| stepper.apply_net_heat(&mut s.temperature, 1e-9))
+                .is_none()
+        })
     });
     group.bench_function("advance", |b| {
         b.iter(|| {
