@@ -447,8 +447,9 @@ impl HeatStepper {
 
     /// The explicit stability limit [s] with the coefficients of the last [`Self::prepare`]
     /// (without the safety factor): min over cells of C_i / (Σ conductances + 3 Σ outflow
-    /// ṁ c_p), with the face conductances of [`face_stability_conductance`]. [`Self::step`]
-    /// gets the same number from the face pass of its first sub-step
+    /// ṁ c_p); a face conducts λ_f |A| / (ds n·e_s) inside a medium, the series conductance of
+    /// an interface, and at a boundary the conductance of its case plus 2 ṁ c_p of an outflow.
+    /// [`Self::step`] gets the same number from the face pass of its first sub-step
     /// ([`Self::face_heat_and_conductances`], [`Self::net_heat_and_stability_limit`]); this
     /// stage computes it alone.
     pub fn stability_limit(
@@ -788,7 +789,7 @@ impl HeatStepper {
     }
 
     /// Stage 3 of the first sub-step of [`Self::step`]: [`Self::face_heat`] and, in the same
-    /// pass, each face's conductance in the stability limit ([`face_stability_conductance`]).
+    /// pass, each face's conductance in the stability limit (as in [`Self::stability_limit`]).
     pub fn face_heat_and_conductances(
         &mut self,
         model: &HeatModel,

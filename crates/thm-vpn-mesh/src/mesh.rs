@@ -251,8 +251,8 @@ fn t2t_aperture(gamma: f64, pa: [f64; 2], pb: [f64; 2], d: [f64; 2], len: f64) -
     std::hint::select_unpredictable(len > 0.0, h, 0.0)
 }
 
-/// What the channel stage reads of the cells and faces.
-struct FaceGeometry<'a> {
+/// What the channel stage reads of the cells, faces and vertices.
+struct ChannelInputs<'a> {
     centroid: &'a [[f64; 2]],
     face_vertices: &'a [[u32; 2]],
     vertices: &'a [[f64; 2]],
@@ -262,7 +262,7 @@ struct FaceGeometry<'a> {
 /// given by their kind, cells and face (see [`PoreMesh::update_channel_geometry`]).
 #[inline(always)]
 fn channel_lanes<const L: usize>(
-    g: &FaceGeometry<'_>,
+    g: &ChannelInputs<'_>,
     t2t_reduction_factor: Option<f64>,
     kind: &[ChannelKind; L],
     cells: &[[u32; 2]; L],
@@ -650,7 +650,7 @@ impl PoreMesh {
     /// per-face ones.
     pub fn update_channel_geometry(&mut self, t2t_reduction_factor: Option<f64>) {
         let ch = &mut self.channels;
-        let geometry = FaceGeometry {
+        let geometry = ChannelInputs {
             centroid: &self.cell_centroid,
             face_vertices: &self.face_vertices,
             vertices: &self.vertices,

@@ -18,9 +18,9 @@
 //!    centroids ([`locality_order`]), and vertices are numbered in order of first use by the
 //!    sorted triangles within groups of the same kinematics, the free one-anchor vertices
 //!    first ([`crate::motion::VertexAnchors::kinematics_order`]). Faces and channels are
-//!    then created in that order too, so cells, vertices and faces that are close in space are close in memory: every later pass (the
-//!    geometry update, the heat and flow stencils, the remap) gathers from a few cache lines
-//!    instead of from all over the mesh.
+//!    then created in that order too, so cells, vertices and faces that are close in space
+//!    are close in memory: every later pass (the geometry update, the heat and flow
+//!    stencils, the remap) gathers from a few cache lines instead of from all over the mesh.
 //! 8. [`PoreMesh::from_triangles`] (faces, geometry, T2T channels A-Eq. 9), then S2S channels
 //!    (A-Eq. 8) across the contacts.
 
