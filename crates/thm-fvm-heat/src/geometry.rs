@@ -83,12 +83,13 @@ pub(crate) enum FaceGeometry {
         d0: f64,
         d1: f64,
     },
-    /// Fluid–solid interface (case IV): face area |A| [m²], the solid cell's
-    /// centroid-to-face-centroid distance d_{r,c} [m], whether the fluid cell is cell 0, and
-    /// the sphere owning the solid cell.
+    /// Fluid–solid interface (case IV): face area |A| [m²], the conductance λ_s |A| / d_{r,c}
+    /// [W/K] of the solid half cell (d_{r,c} the solid cell's centroid-to-face-centroid
+    /// distance; 0 where it vanishes), whether the fluid cell is cell 0, and the sphere owning
+    /// the solid cell.
     Interface {
         area: f64,
-        solid_distance: f64,
+        solid_conductance: f64,
         fluid_first: bool,
         owner: u32,
         /// Position in [`HeatGeometry::interface_faces`].
@@ -276,7 +277,7 @@ impl HeatGeometry {
                 };
                 self.face.push(FaceGeometry::Interface {
                     area: 0.0,
-                    solid_distance: 0.0,
+                    solid_conductance: 0.0,
                     fluid_first: k0.is_fluid(),
                     owner,
                     index: self.interface_faces.len() as u32,
@@ -408,15 +409,16 @@ impl HeatGeometry {
         mesh: &PoreMesh,
     ) -> Result<(), HeatError> {
         self.check(mesh)?;
-        self.update_faces(mesh)?;
+        self.update_faces(model, mesh)?;
         self.update_stencils(model, mesh);
         self.update_channels(mesh);
         self.update_spheres(mesh);
         Ok(())
     }
 
-    fn update_faces(&mut self, mesh: &PoreMesh) -> Result<(), HeatError> {
+    fn update_faces(&mut self, model: &HeatModel, mesh: &PoreMesh) -> Result<(), HeatError> {
         let b = mesh.thickness;
+        let solid_lambda = model.solid.conductivity;
         // Boundary faces (few; in slot order).
         let mut slot = 0usize;
         for f in 0..mesh.n_faces() {
@@ -474,14 +476,19 @@ impl HeatGeometry {
                     }
                     FaceGeometry::Interface {
                         area: a,
-                        solid_distance,
+                        solid_conductance,
                         fluid_first,
                         ..
                     } => {
                         *a = area;
                         let xs = if *fluid_first { x1 } else { x0 };
                         let r = sub(xf, xs);
-                        *solid_distance = dot(r, r).sqrt();
+                        let solid_distance = dot(r, r).sqrt();
+                        *solid_conductance = if solid_distance > 0.0 {
+                            solid_lambda * area / solid_distance
+                        } else {
+                            0.0
+                        };
                     }
                     FaceGeometry::Boundary { .. } => {}
                 }

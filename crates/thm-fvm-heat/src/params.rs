@@ -221,6 +221,20 @@ pub struct Phase {
     pub(crate) dynamic_viscosity: f64,
 }
 
+impl Phase {
+    /// Pr^{1/3} = (c_p μ / λ)^{1/3}; 0 for a phase that does not conduct (its interface
+    /// coefficient is zero).
+    pub(crate) fn prandtl_cube_root(&self) -> f64 {
+        if self.conductivity > 0.0 {
+            crate::properties::cube_root(
+                self.specific_heat * self.dynamic_viscosity / self.conductivity,
+            )
+        } else {
+            0.0
+        }
+    }
+}
+
 /// Validated boundary condition of one side.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum SideCondition {
@@ -242,6 +256,9 @@ pub struct HeatModel {
     pub(crate) stability_safety: f64,
     pub(crate) gradient: GradientScheme,
     pub(crate) interface: InterfaceModel,
+    /// Pr^{1/3} = (c_p μ / λ)^{1/3} of the pure liquid and the pure gas (0 for a phase that
+    /// does not conduct): a fluid cell holding one phase only needs no cube root per step.
+    pub(crate) pure_prandtl_cbrt: [f64; 2],
 }
 
 /// Index of a side in [`HeatModel::sides`].
@@ -376,6 +393,7 @@ impl HeatModel {
             stability_safety: f,
             gradient: params.gradient,
             interface: params.interface,
+            pure_prandtl_cbrt: [liquid, gas].map(|p| p.prandtl_cube_root()),
         })
     }
 

@@ -18,7 +18,7 @@
 //! 1-thread and N-thread runs give identical bits.
 
 use rayon::prelude::*;
-use thm_vpn_mesh::{ChannelKind, PoreMesh};
+use thm_vpn_mesh::{ChannelKind, Channels, PoreMesh};
 
 use crate::geometry::{
     BoundaryFace, CELL_FIRST, CELL_FLUID, CELL_INTERFACE, FACE_VALUE, FaceGeometry, GRAIN, dot,
@@ -57,6 +57,51 @@ pub(crate) fn face_conductivity(l0: f64, l1: f64, d0: f64, d1: f64) -> f64 {
         l0 * l1 * (d0 + d1) / den
     } else {
         0.5 * (l0 + l1)
+    }
+}
+
+/// x = ρ_eff v / μ_eff of A-Eqs. 43–45 for a fluid cell with mixture `mix` whose channels
+/// are `channels` (pairs of channel index and side): v is the fastest channel speed
+/// |ṁ| / (ρ_eff h b), so x = max |ṁ| / (h b) / μ_eff and the density cancels. The largest
+/// |ṁ| / (h b) is found by cross-multiplication, so the cell makes one division, not one per
+/// channel. Zero at rest, without open channels, or for a mixture of no density.
+#[inline]
+fn fastest_channel_x(
+    channels: &[(u32, bool)],
+    ch: &Channels,
+    input: &FlowInput,
+    thickness: f64,
+    mix: &crate::properties::MixtureProperties,
+) -> f64 {
+    if mix.density <= 0.0 {
+        return 0.0;
+    }
+    let (mut flux, mut area) = (0.0f64, 1.0f64);
+    for &(k, _) in channels {
+        let k = k as usize;
+        let a = ch.aperture[k] * thickness;
+        let m = input.channel_mass_flux[k].abs();
+        if a > 0.0 && m * area > flux * a {
+            (flux, area) = (m, a);
+        }
+    }
+    if flux > 0.0 {
+        flux / (area * mix.dynamic_viscosity)
+    } else {
+        0.0
+    }
+}
+
+/// Pr^{1/3} of a fluid cell of liquid fraction `alpha` holding one phase only (a model
+/// constant); `None` for a mixture.
+#[inline]
+fn pure_phase_prandtl_cbrt(model: &HeatModel, alpha: f64) -> Option<f64> {
+    if alpha == 1.0 {
+        Some(model.pure_prandtl_cbrt[0])
+    } else if alpha == 0.0 {
+        Some(model.pure_prandtl_cbrt[1])
+    } else {
+        None
     }
 }
 
@@ -271,7 +316,7 @@ impl HeatStepper {
             return Err(input.fluid_entry_error(c));
         }
         input.check_fluxes(mesh)?;
-        self.prepare_interfaces(model, geometry, mesh);
+        self.prepare_interfaces(geometry, mesh);
         self.prepare_channels(mesh);
         let nf = mesh.n_faces();
         self.gradient.resize(n, [0.0; 2]);
@@ -348,17 +393,17 @@ impl HeatStepper {
                     lam[i] = mix.conductivity;
                     cp[i] = mix.specific_heat;
                     if flag & CELL_INTERFACE != 0 {
-                        let c = lo + i;
-                        let mut speed = 0.0f64;
-                        for &(k, _) in &cell_channel[start[c] as usize..start[c + 1] as usize] {
-                            let k = k as usize;
-                            let a = ch.aperture[k] * b;
-                            if a > 0.0 && mix.density > 0.0 {
-                                speed =
-                                    speed.max(input.channel_mass_flux[k].abs() / (mix.density * a));
-                            }
-                        }
-                        exchange[i] = ExchangeFactors::new(&mix, speed);
+                        exchange[i] = ExchangeFactors::new(
+                            &mix,
+                            fastest_channel_x(
+                                &cell_channel[start[lo + i] as usize..start[lo + i + 1] as usize],
+                                ch,
+                                input,
+                                b,
+                                &mix,
+                            ),
+                            pure_phase_prandtl_cbrt(model, a),
+                        );
                     }
                 }
                 (bad_temperature, bad_fluid)
@@ -368,20 +413,17 @@ impl HeatStepper {
 
     /// Part of [`Self::prepare`]: the law of every fluid–solid interface face (case IV) from
     /// the cell properties of [`Self::prepare_cells`]: h_f (A-Eq. 45) from the fluid cell's
-    /// mixture and fastest channel speed, in series with the solid's half cell λ_s / d_{r,c}.
-    pub fn prepare_interfaces(
-        &mut self,
-        model: &HeatModel,
-        geometry: &HeatGeometry,
-        mesh: &PoreMesh,
-    ) {
+    /// mixture and fastest channel speed, in series with the solid's half cell λ_s / d_{r,c}:
+    /// with G_f = h_f |A| and G_s = λ_s |A| / d_{r,c} (cached in the geometry), the face
+    /// conducts G_f G_s / (G_f + G_s) and the interface temperature weighs the fluid cell by
+    /// G_f / (G_f + G_s).
+    pub fn prepare_interfaces(&mut self, geometry: &HeatGeometry, mesh: &PoreMesh) {
         let faces = &geometry.interface_faces;
         self.interface_law
             .resize(faces.len(), InterfaceLaw::default());
         let exchange = &self.exchange;
         let diameter = &geometry.sphere_diameter_powers;
         let porosity = geometry.porosity;
-        let solid_lambda = model.solid.conductivity;
         self.interface_law
             .par_iter_mut()
             .with_min_len(GRAIN)
@@ -389,7 +431,7 @@ impl HeatStepper {
             .for_each(|(law, &f)| {
                 let FaceGeometry::Interface {
                     area,
-                    solid_distance,
+                    solid_conductance: gs,
                     fluid_first,
                     owner,
                     ..
@@ -400,14 +442,10 @@ impl HeatStepper {
                 let [c0, c1] = mesh.face_cells[f as usize];
                 let cf = if fluid_first { c0 } else { c1 } as usize;
                 let dp = diameter.get(owner as usize).copied().unwrap_or_default();
-                let h = exchange[cf].coefficient(porosity, &dp);
-                let ks = if solid_distance > 0.0 {
-                    solid_lambda / solid_distance
-                } else {
-                    0.0
-                };
-                let (g, wf) = if h + ks > 0.0 {
-                    (area * h * ks / (h + ks), h / (h + ks))
+                let gf = exchange[cf].coefficient(porosity, &dp) * area;
+                let (g, wf) = if gf + gs > 0.0 {
+                    let r = 1.0 / (gf + gs);
+                    (gf * gs * r, gf * r)
                 } else {
                     (0.0, 0.5)
                 };
@@ -1148,5 +1186,86 @@ pub(crate) fn boundary_conductance(
                 0.0
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::HeatParams;
+    use crate::properties::{REYNOLDS_SWITCH, interface_coefficient};
+    use thm_vpn_mesh::{CellKind, NONE};
+
+    /// The interface law of [`HeatStepper::prepare`] (factored coefficient, the fastest
+    /// channel found by cross-multiplication, Pr^{1/3} of a pure phase from the model) equals
+    /// A-Eqs. 43–45 evaluated directly, h_f in series with λ_s / d_{r,c}: pure liquid, pure
+    /// gas and a mixture, at rest and in both Reynolds ranges.
+    #[test]
+    fn interface_law_matches_the_direct_correlations() {
+        // Left square fluid (two triangles joined by one T2T channel), right square solid.
+        let mesh = PoreMesh::structured_rectangle(2, 1, 0.008, 0.004, 0.008, 0.0115, |p| {
+            if p[0] < 0.004 {
+                CellKind::Fluid
+            } else {
+                CellKind::Solid { owner: 0 }
+            }
+        })
+        .unwrap();
+        let model = HeatModel::new(&HeatParams::paper_a_table_1(), &mesh).unwrap();
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
+        assert_eq!(geometry.interface_faces.len(), 1);
+        assert_eq!(mesh.channels.len(), 1);
+        let f = geometry.interface_faces[0] as usize;
+        let [c0, c1] = mesh.face_cells[f];
+        assert_ne!(c1, NONE);
+        let (cf, cs) = if mesh.cell_kind[c0 as usize].is_fluid() {
+            (c0 as usize, c1 as usize)
+        } else {
+            (c1 as usize, c0 as usize)
+        };
+        let r = geometry.sphere_radius()[0];
+        let (xf, xs) = (mesh.face_centroid[f], mesh.cell_centroid[cs]);
+        let d = ((xf[0] - xs[0]).powi(2) + (xf[1] - xs[1]).powi(2)).sqrt();
+        let area = mesh.face_length[f] * mesh.thickness;
+        let channel_area = mesh.channels.aperture[0] * mesh.thickness;
+        let state = HeatState {
+            time: 0.0,
+            steps: 0,
+            temperature: vec![300.0; mesh.n_cells()],
+        };
+        let mut ranges = [0usize; 3];
+        for alpha in [1.0, 0.0, 0.37] {
+            for flux in [0.0, 1e-9, -3e-7, 2e-5, -4e-3] {
+                let mut input = FlowInput::liquid_at_rest(&mesh, 998.0, 1.2);
+                input.liquid_fraction.iter_mut().for_each(|a| *a = alpha);
+                input.channel_mass_flux[0] = flux;
+                let mut stepper = HeatStepper::new();
+                stepper
+                    .prepare(&model, &geometry, &mesh, &input, &state)
+                    .unwrap();
+                let mix = model.fluid_mixture(alpha, 998.0, 1.2);
+                let speed = flux.abs() / (mix.density * channel_area);
+                let re = mix.density * speed * 2.0 * r / mix.dynamic_viscosity;
+                ranges[if re == 0.0 {
+                    0
+                } else if re <= REYNOLDS_SWITCH {
+                    1
+                } else {
+                    2
+                }] += 1;
+                let h = interface_coefficient(&mix, geometry.porosity(), speed, r);
+                let g = area / (1.0 / h + d / model.solid.conductivity);
+                let law = stepper.interface_law[0];
+                assert!(
+                    (law.g - g).abs() <= 1e-12 * g,
+                    "alpha {alpha}, flux {flux}: {} vs {g}",
+                    law.g
+                );
+                let wf = h / (h + model.solid.conductivity / d);
+                let w0 = if cf == c0 as usize { wf } else { 1.0 - wf };
+                assert!((law.w0 - w0).abs() <= 1e-12, "{} vs {w0}", law.w0);
+            }
+        }
+        assert!(ranges.iter().all(|&n| n > 0), "{ranges:?}");
     }
 }
