@@ -165,7 +165,19 @@ impl ExchangeFactors {
     /// The factors of a cell with mixture `mix` and x = ρ_eff v / μ_eff. `prandtl_cbrt` is
     /// Pr^{1/3} where the caller knows it (a pure phase, whose Prandtl number is a model
     /// constant); `None` computes it from the mixture.
+    #[cfg(test)]
     pub(crate) fn new(mix: &MixtureProperties, x: f64, prandtl_cbrt: Option<f64>) -> Self {
+        let mut f = Self::pending(mix, x, prandtl_cbrt);
+        f.complete_powers();
+        f
+    }
+
+    /// The first half of [`Self::new`]: everything but the powers of x. Until
+    /// [`Self::complete_powers`] runs, `x02` holds Pr^{1/3} and `x06`, `x07` are zero. The
+    /// powers (a chain of about a hundred dependent floating-point operations) are left to a
+    /// separate loop over many cells, whose independent chains the processor overlaps.
+    #[inline]
+    pub(crate) fn pending(mix: &MixtureProperties, x: f64, prandtl_cbrt: Option<f64>) -> Self {
         if mix.conductivity <= 0.0 {
             return Self::default();
         }
@@ -179,14 +191,25 @@ impl ExchangeFactors {
         let pr3 = prandtl_cbrt.unwrap_or_else(|| {
             cube_root((mix.specific_heat * mix.dynamic_viscosity / mix.conductivity).max(0.0))
         });
-        // x^0.6 = (x^0.2)^3 and x^0.7 = x^0.2 x^0.5.
-        let x02 = fifth_root(x);
         Self {
             conductivity: mix.conductivity,
             x,
-            x02: x02 * pr3,
-            x06: x02 * x02 * x02 * pr3,
-            x07: x02 * x.sqrt() * pr3,
+            x02: pr3,
+            x06: 0.0,
+            x07: 0.0,
+        }
+    }
+
+    /// The second half of [`Self::new`]: x^0.2 Pr^{1/3}, x^0.6 Pr^{1/3} = (x^0.2)^3 Pr^{1/3}
+    /// and x^0.7 Pr^{1/3} = x^0.2 x^0.5 Pr^{1/3}; nothing to do at rest.
+    #[inline]
+    pub(crate) fn complete_powers(&mut self) {
+        if self.x > 0.0 {
+            let (x, pr3) = (self.x, self.x02);
+            let x02 = fifth_root(x);
+            self.x02 = x02 * pr3;
+            self.x06 = x02 * x02 * x02 * pr3;
+            self.x07 = x02 * x.sqrt() * pr3;
         }
     }
 

@@ -393,7 +393,7 @@ impl HeatStepper {
                     lam[i] = mix.conductivity;
                     cp[i] = mix.specific_heat;
                     if flag & CELL_INTERFACE != 0 {
-                        exchange[i] = ExchangeFactors::new(
+                        exchange[i] = ExchangeFactors::pending(
                             &mix,
                             fastest_channel_x(
                                 &cell_channel[start[lo + i] as usize..start[lo + i + 1] as usize],
@@ -404,6 +404,11 @@ impl HeatStepper {
                             ),
                             pure_phase_prandtl_cbrt(model, a),
                         );
+                    }
+                }
+                for (e, &flag) in exchange.iter_mut().zip(flags) {
+                    if flag & (CELL_FLUID | CELL_INTERFACE) == CELL_FLUID | CELL_INTERFACE {
+                        e.complete_powers();
                     }
                 }
                 (bad_temperature, bad_fluid)
