@@ -4,16 +4,16 @@
 //!    cell-grid search and merge of the contact histories when a particle (or wall) moved
 //!    more than half the skin; the per-particle contact index when the lists changed;
 //! 2. contact forces: every contact in parallel, each writing only its own history, response
-//!    and "carried force" flag; a listed pair that does not touch (and is neither bonded nor
-//!    sheared) costs one distance, and is not looked at again until the drift since then
-//!    could have closed its gap; reports whether a bond broke (a boolean OR);
+//!    and "carried force" flag, and stamping its particles when it carried force (every
+//!    stamp of a step is the same value); a listed pair that does not touch (and is neither
+//!    bonded nor sheared) costs one distance, and is not looked at again until the drift
+//!    since then could have closed its gap; reports whether a bond broke (a boolean OR);
 //! 3. events: broken-bond events (the contacts are scanned only when a bond broke) and wall
-//!    forces, serially in contact order; when at most a quarter of the contacts carried
-//!    force, the particles that have one are marked;
+//!    forces, serially in contact order;
 //! 4. gather and integrate, one pass over the particles: every particle sums its own contacts
-//!    in contact-index order (those that carried force; none for an unmarked particle when
-//!    particles were marked), plus external force and gravity (no
-//!    atomics: the same bits for any thread count), then Cundall's non-viscous damping
+//!    in contact-index order (those that carried force; when at most a quarter of the
+//!    contacts did, only the stamped particles look), plus external force and gravity (no
+//!    floating-point atomics: the same bits for any thread count), then Cundall's non-viscous damping
 //!    (A-Eq. 7) and leapfrog, with the finiteness check (the first bad particle is a minimum
 //!    over indices);
 //! 5. walls move at their prescribed velocity.
@@ -27,6 +27,7 @@ use crate::state::{BondBreak, ContactList, DemState, ParticleState};
 use crate::vec3::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
 /// Loops shorter than this run serially (rayon's dispatch would cost more than the work);
 /// either way every item is computed by the same code, so the bits do not change.
@@ -102,9 +103,12 @@ pub struct Stepper<L: ContactLaw> {
     /// force and torques are zero.
     active: Vec<u8>,
     wall_active: Vec<u8>,
-    /// `touched[i] == stamp` when particle `i` has a contact that carried force in this step
-    /// (kept only when few contacts did: the gather then skips the other particles).
-    touched: Vec<u32>,
+    /// `touched[i] == stamp` when particle `i` has a contact that carried force in this step,
+    /// stored by the contact pass itself (used only when few contacts did: the gather then
+    /// skips the other particles). Every store of a step writes the same value, so the
+    /// result does not depend on which thread stores first: relaxed atomics, plain moves on
+    /// the common targets, make those concurrent stores defined behaviour.
+    touched: Vec<AtomicU32>,
     stamp: u32,
     /// A listed pair found apart (and unbonded, without shear) stays apart while the drift
     /// (see [`Drift`]) is below its entry: it is not looked at again until then.
@@ -169,9 +173,11 @@ impl<L: ContactLaw> Stepper<L> {
     /// One time step. Runs in the current rayon pool; the result does not depend on its size.
     pub fn step(&mut self, state: &mut DemState) -> Result<(), DemError> {
         let drift = self.update_neighbours(state)?;
+        self.next_stamp(state.particles.len());
         let (any_broke, active_count) = self.compute_contact_forces(state, drift);
         self.collect_events(state, any_broke);
-        let sparse = self.mark_touched(state, active_count);
+        // Few contacts carried force: the gather visits only the stamped particles.
+        let sparse = active_count.saturating_mul(4) <= state.contacts.len();
         self.gather_and_integrate(state, sparse)?;
         let dt = self.config.params.time_step;
         for w in &mut state.walls {
@@ -338,6 +344,7 @@ impl<L: ContactLaw> Stepper<L> {
         );
         self.active.resize(contacts.len(), 0);
         self.wall_active.resize(wall_contacts.len(), 0);
+        let (touched, stamp) = (&self.touched[..], self.stamp);
         type Item<'a> = (
             (
                 (
@@ -388,6 +395,10 @@ impl<L: ContactLaw> Stepper<L> {
             };
             *r = law.respond(&input, &kin, h);
             *active = u8::from(r.active);
+            if r.active {
+                touched[a].store(stamp, Relaxed);
+                touched[b].store(stamp, Relaxed);
+            }
             // Bit 0: a bond broke; bit 1: the contact carried force.
             u8::from(r.broke.is_some()) | (*active << 1)
         };
@@ -476,6 +487,9 @@ impl<L: ContactLaw> Stepper<L> {
             };
             *r = law.respond(&input, &kin, h);
             *active = u8::from(r.active);
+            if r.active {
+                touched[a].store(stamp, Relaxed);
+            }
         };
         if wall_contacts.len() >= PAR_THRESHOLD {
             wall_contacts
@@ -503,47 +517,18 @@ impl<L: ContactLaw> Stepper<L> {
         (any_broke, active_count)
     }
 
-    /// When at most a quarter of the particle–particle contacts carried force, stamps the
-    /// particles that have one (a serial scan of the flags, eight at a time) so that the
-    /// gather skips the others; returns whether it did. Skipping changes no bit: those
-    /// particles would add only zeros.
-    fn mark_touched(&mut self, state: &DemState, active_count: usize) -> bool {
-        if active_count.saturating_mul(4) > state.contacts.len() {
-            return false;
-        }
-        let n = state.particles.len();
+    /// A new stamp for this step's contact pass (see `touched`), with `touched` sized for
+    /// `n` particles; clears the stamps when the counter wraps.
+    fn next_stamp(&mut self, n: usize) {
         if self.touched.len() != n {
             self.touched.clear();
-            self.touched.resize(n, 0);
+            self.touched.resize_with(n, || AtomicU32::new(0));
         }
         self.stamp = self.stamp.wrapping_add(1);
         if self.stamp == 0 {
-            self.touched.fill(0);
+            self.touched.iter_mut().for_each(|t| *t.get_mut() = 0);
             self.stamp = 1;
         }
-        let (touched, stamp) = (&mut self.touched[..], self.stamp);
-        for (flags, pairs, both) in [
-            (&self.active[..], &state.contacts.pair[..], true),
-            (&self.wall_active[..], &state.wall_contacts.pair[..], false),
-        ] {
-            for (word, pairs) in flags.chunks(8).zip(pairs.chunks(8)) {
-                let any = match <[u8; 8]>::try_from(word) {
-                    Ok(w) => u64::from_le_bytes(w) != 0,
-                    Err(_) => word.iter().any(|&f| f != 0),
-                };
-                if any {
-                    for (&f, p) in word.iter().zip(pairs) {
-                        if f != 0 {
-                            touched[p[0] as usize] = stamp;
-                            if both {
-                                touched[p[1] as usize] = stamp;
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        true
     }
 
     /// Stage 3: broken-bond events (in contact order; the contacts are scanned only when
@@ -656,7 +641,7 @@ impl<L: ContactLaw> Stepper<L> {
                 let i = s + j;
                 let mut fi = Vec3::ZERO;
                 let mut ti = Vec3::ZERO;
-                if !(sparse && touched[i] != stamp) {
+                if !(sparse && touched[i].load(Relaxed) != stamp) {
                     for &k in &b_entry[b_range[0] as usize..b_range[1] as usize] {
                         let k = k as usize;
                         if active[k] != 0 {
