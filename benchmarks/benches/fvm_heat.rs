@@ -132,7 +132,7 @@ fn bench(c: &mut Criterion) {
         b.iter(|| pool.install(|| stepper.prepare_cells(&model, g, &mesh, &input, &s.temperature)))
     });
     group.bench_function("prepare_interfaces", |b| {
-        b.iter(|| pool.install(|| stepper.prepare_interfaces(g, &mesh)))
+        b.iter(|| pool.install(|| stepper.prepare_interfaces(g)))
     });
     group.bench_function("prepare_channels", |b| {
         b.iter(|| pool.install(|| stepper.prepare_channels(&mesh)))

@@ -221,7 +221,7 @@ mod stages {
             "cells" => {
                 st.prepare_cells(model, g, mesh, input, t);
             }
-            "interfaces" => st.prepare_interfaces(g, mesh),
+            "interfaces" => st.prepare_interfaces(g),
             "channels" => st.prepare_channels(mesh),
             "stability" => {
                 std::hint::black_box(st.stability_limit(model, g, mesh, input));

@@ -83,20 +83,28 @@ pub(crate) enum FaceGeometry {
         d0: f64,
         d1: f64,
     },
-    /// Fluid–solid interface (case IV): face area |A| [m²], the conductance λ_s |A| / d_{r,c}
-    /// [W/K] of the solid half cell (d_{r,c} the solid cell's centroid-to-face-centroid
-    /// distance; 0 where it vanishes), whether the fluid cell is cell 0, and the sphere owning
-    /// the solid cell.
-    Interface {
-        area: f64,
-        solid_conductance: f64,
-        fluid_first: bool,
-        owner: u32,
-        /// Position in [`HeatGeometry::interface_faces`].
-        index: u32,
-    },
+    /// Fluid–solid interface (case IV): its record in [`HeatGeometry::interface`] and its
+    /// per-step law, both at this position in [`HeatGeometry::interface_faces`].
+    Interface { index: u32 },
     /// Outer boundary: index into [`HeatGeometry::boundary`].
     Boundary { slot: u32 },
+}
+
+/// One fluid–solid interface face (case IV): what the per-step law needs, packed in one
+/// record per face in [`HeatGeometry::interface_faces`] order.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct InterfaceFace {
+    /// |A| [m²].
+    pub area: f64,
+    /// Conductance λ_s |A| / d_{r,c} of the solid half cell [W/K] (d_{r,c} the solid cell's
+    /// centroid-to-face-centroid distance; 0 where it vanishes).
+    pub solid_conductance: f64,
+    /// The fluid cell.
+    pub fluid_cell: u32,
+    /// The sphere owning the solid cell.
+    pub owner: u32,
+    /// Whether the fluid cell is cell 0 of the face.
+    pub fluid_first: bool,
 }
 
 /// One outer boundary face (cases I–III).
@@ -122,8 +130,10 @@ pub struct HeatGeometry {
     n_channels: usize,
     pub(crate) face: Vec<FaceGeometry>,
     pub(crate) boundary: Vec<BoundaryFace>,
-    // Faces of class `Interface`, in face order (their per-step law is stored in this order).
+    // Faces of class `Interface`, in face order (their per-step law is stored in this order),
+    // and their records.
     pub(crate) interface_faces: Vec<u32>,
+    pub(crate) interface: Vec<InterfaceFace>,
     // Faces whose temperature is a stencil value (interfaces and boundaries), in face order.
     pub(crate) value_faces: Vec<u32>,
     // Per cell: fluid (bit 0), fluid with a case IV interface face (bit 1, needs the h_f
@@ -237,6 +247,7 @@ impl HeatGeometry {
         self.face.clear();
         self.boundary.clear();
         self.interface_faces.clear();
+        self.interface.clear();
         self.value_faces.clear();
         let continuous = model.interface == InterfaceModel::Continuous;
         // Position of each face in `value_faces` (NONE for faces inside a medium).
@@ -276,13 +287,15 @@ impl HeatGeometry {
                     CellKind::Fluid => 0,
                 };
                 self.face.push(FaceGeometry::Interface {
-                    area: 0.0,
-                    solid_conductance: 0.0,
-                    fluid_first: k0.is_fluid(),
-                    owner,
                     index: self.interface_faces.len() as u32,
                 });
                 self.interface_faces.push(f as u32);
+                self.interface.push(InterfaceFace {
+                    fluid_cell: if k0.is_fluid() { c0 } else { c1 },
+                    owner,
+                    fluid_first: k0.is_fluid(),
+                    ..InterfaceFace::default()
+                });
                 *vi = self.value_faces.len() as u32;
                 self.value_faces.push(f as u32);
             }
@@ -474,23 +487,7 @@ impl HeatGeometry {
                         *d0 = dot(sub(xf, x0), es).max(0.0);
                         *d1 = dot(sub(x1, xf), es).max(0.0);
                     }
-                    FaceGeometry::Interface {
-                        area: a,
-                        solid_conductance,
-                        fluid_first,
-                        ..
-                    } => {
-                        *a = area;
-                        let xs = if *fluid_first { x1 } else { x0 };
-                        let r = sub(xf, xs);
-                        let solid_distance = dot(r, r).sqrt();
-                        *solid_conductance = if solid_distance > 0.0 {
-                            solid_lambda * area / solid_distance
-                        } else {
-                            0.0
-                        };
-                    }
-                    FaceGeometry::Boundary { .. } => {}
+                    FaceGeometry::Interface { .. } | FaceGeometry::Boundary { .. } => {}
                 }
                 None
             })
@@ -503,6 +500,24 @@ impl HeatGeometry {
                 minimum: MIN_FACE_COSINE,
             });
         }
+        // Interface faces: area and the solid half cell's conductance.
+        self.interface
+            .par_iter_mut()
+            .with_min_len(GRAIN)
+            .zip(self.interface_faces.par_iter())
+            .for_each(|(face, &f)| {
+                let f = f as usize;
+                let [c0, c1] = mesh.face_cells[f];
+                let solid = if face.fluid_first { c1 } else { c0 } as usize;
+                let r = sub(mesh.face_centroid[f], mesh.cell_centroid[solid]);
+                let solid_distance = dot(r, r).sqrt();
+                face.area = mesh.face_length[f] * b;
+                face.solid_conductance = if solid_distance > 0.0 {
+                    solid_lambda * face.area / solid_distance
+                } else {
+                    0.0
+                };
+            });
         Ok(())
     }
 

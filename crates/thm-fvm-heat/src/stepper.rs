@@ -316,7 +316,7 @@ impl HeatStepper {
             return Err(input.fluid_entry_error(c));
         }
         input.check_fluxes(mesh)?;
-        self.prepare_interfaces(geometry, mesh);
+        self.prepare_interfaces(geometry);
         self.prepare_channels(mesh);
         let nf = mesh.n_faces();
         self.gradient.resize(n, [0.0; 2]);
@@ -422,8 +422,8 @@ impl HeatStepper {
     /// with G_f = h_f |A| and G_s = λ_s |A| / d_{r,c} (cached in the geometry), the face
     /// conducts G_f G_s / (G_f + G_s) and the interface temperature weighs the fluid cell by
     /// G_f / (G_f + G_s).
-    pub fn prepare_interfaces(&mut self, geometry: &HeatGeometry, mesh: &PoreMesh) {
-        let faces = &geometry.interface_faces;
+    pub fn prepare_interfaces(&mut self, geometry: &HeatGeometry) {
+        let faces = &geometry.interface;
         self.interface_law
             .resize(faces.len(), InterfaceLaw::default());
         let exchange = &self.exchange;
@@ -433,28 +433,22 @@ impl HeatStepper {
             .par_iter_mut()
             .with_min_len(GRAIN)
             .zip(faces.par_iter())
-            .for_each(|(law, &f)| {
-                let FaceGeometry::Interface {
-                    area,
-                    solid_conductance: gs,
-                    fluid_first,
-                    owner,
-                    ..
-                } = geometry.face[f as usize]
-                else {
-                    return;
-                };
-                let [c0, c1] = mesh.face_cells[f as usize];
-                let cf = if fluid_first { c0 } else { c1 } as usize;
-                let dp = diameter.get(owner as usize).copied().unwrap_or_default();
-                let gf = exchange[cf].coefficient(porosity, &dp) * area;
+            .for_each(|(law, face)| {
+                let dp = diameter
+                    .get(face.owner as usize)
+                    .copied()
+                    .unwrap_or_default();
+                let (gf, gs) = (
+                    exchange[face.fluid_cell as usize].coefficient(porosity, &dp) * face.area,
+                    face.solid_conductance,
+                );
                 let (g, wf) = if gf + gs > 0.0 {
                     let r = 1.0 / (gf + gs);
                     (gf * gs * r, gf * r)
                 } else {
                     (0.0, 0.5)
                 };
-                let w0 = if fluid_first { wf } else { 1.0 - wf };
+                let w0 = if face.fluid_first { wf } else { 1.0 - wf };
                 *law = InterfaceLaw { g, w0 };
             });
     }
