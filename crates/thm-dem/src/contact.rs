@@ -298,7 +298,8 @@ pub fn update_contact<V: SpaceVector>(
                 0.0
             };
             let strength = (props.bond_shear_strength + friction).max(0.0);
-            if shear.norm() > strength {
+            // |F_s| > strength, compared squared (both sides are non-negative): no root.
+            if shear.norm_squared() > strength * strength {
                 broke = Some(BreakMode::Shear);
             }
         }
@@ -309,8 +310,10 @@ pub fn update_contact<V: SpaceVector>(
     if history.bond != BondState::Intact {
         normal_force = normal_force.max(0.0);
         let limit = normal_force * props.friction_coefficient;
-        let trial = shear.norm();
-        if trial > limit {
+        // Sliding when |F_s| > limit, compared squared (both sides are non-negative): a
+        // sticking contact takes no root.
+        if shear.norm_squared() > limit * limit {
+            let trial = shear.norm();
             shear = if trial > 0.0 {
                 shear * (limit / trial)
             } else {
