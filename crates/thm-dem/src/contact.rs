@@ -83,10 +83,12 @@ pub struct ContactKinematics<V = Vec3> {
     /// Rotation of the contact frame about the normal over the step \[rad\]:
     /// `½ (ω_A + ω_B)·n Δt` (0 for disks).
     pub twist_angle: f64,
-    /// Lever arm from the centre of A to the contact point \[m\].
-    pub lever_a: V,
-    /// Lever arm from the centre of B to the contact point \[m\].
-    pub lever_b: V,
+    /// Distance from the centre of A to the contact point \[m\]: the lever arm of A is
+    /// `arm_a · normal`.
+    pub arm_a: f64,
+    /// Distance from the centre of B to the contact point \[m\]: the lever arm of B is
+    /// `−arm_b · normal` (0 for a wall).
+    pub arm_b: f64,
 }
 
 impl<V: SpaceVector> ContactKinematics<V> {
@@ -113,8 +115,6 @@ impl<V: SpaceVector> ContactKinematics<V> {
         };
         let penetration = radius_a + radius_b - distance;
         let (arm_a, arm_b) = (radius_a - 0.5 * penetration, radius_b - 0.5 * penetration);
-        let lever_a = normal * arm_a;
-        let lever_b = normal * -arm_b;
         // ω_B × l_B − ω_A × l_A with both levers along the normal: one cross product.
         let v_rel = relative_velocity
             - V::angular_cross(
@@ -129,8 +129,8 @@ impl<V: SpaceVector> ContactKinematics<V> {
             twist_angle: 0.5
                 * V::angular_along(angular_velocity_a + angular_velocity_b, normal)
                 * dt,
-            lever_a,
-            lever_b,
+            arm_a,
+            arm_b,
         }
     }
 
@@ -152,16 +152,16 @@ impl<V: SpaceVector> ContactKinematics<V> {
         let gap = (position - wall_point).dot(wall_normal);
         let normal = -wall_normal;
         let penetration = radius - gap;
-        let lever_a = normal * (radius - 0.5 * penetration);
-        let v_rel = wall_velocity - velocity - V::angular_cross(angular_velocity, lever_a);
+        let arm_a = radius - 0.5 * penetration;
+        let v_rel = wall_velocity - velocity - V::angular_cross(angular_velocity, normal * arm_a);
         let v_t = v_rel - normal * v_rel.dot(normal);
         Self {
             normal,
             penetration,
             shear_increment: v_t * dt,
             twist_angle: 0.5 * V::angular_along(angular_velocity, normal) * dt,
-            lever_a,
-            lever_b: V::ZERO,
+            arm_a,
+            arm_b: 0.0,
         }
     }
 }
@@ -326,10 +326,13 @@ pub fn update_contact<V: SpaceVector>(
     }
     history.shear_force = shear;
     let force_on_b = n * normal_force + shear;
+    // Both levers lie along the normal: (arm_a n) × (−F) = −arm_a (n × F) and
+    // (−arm_b n) × F = −arm_b (n × F), one cross product.
+    let moment = V::moment(n, force_on_b);
     ContactResponse {
         force_on_b,
-        torque_on_a: V::moment(kin.lever_a, -force_on_b),
-        torque_on_b: V::moment(kin.lever_b, force_on_b),
+        torque_on_a: moment * -kin.arm_a,
+        torque_on_b: moment * -kin.arm_b,
         normal_force,
         normal_stress: normal_force / props.stress_area,
         friction_work,

@@ -23,8 +23,8 @@ fn along_x(penetration: f64, shear_increment: Vec3) -> ContactKinematics {
         penetration,
         shear_increment,
         twist_angle: 0.0,
-        lever_a: n * (RA - 0.5 * penetration),
-        lever_b: n * -(RB - 0.5 * penetration),
+        arm_a: RA - 0.5 * penetration,
+        arm_b: RB - 0.5 * penetration,
     }
 }
 
