@@ -75,13 +75,13 @@ pub(crate) fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum FaceGeometry {
     /// Two cells of the same medium: A-Eq. 47 with λ_f factored out. `conductance` =
-    /// |A| / (ds n·e_s) [m], `cross` = A − e_s |A| / (n·e_s) [m²], and the distances `d0`,
-    /// `d1` [m] of the two centroids to the face along e_s (harmonic face conductivity).
+    /// |A| / (ds n·e_s) [m], `cross` = A − e_s |A| / (n·e_s) [m²], and `weight0` =
+    /// d0 / (d0 + d1), the share of cell 0 in the link, with d0, d1 the distances of the two
+    /// centroids to the face along e_s (harmonic face conductivity; d0 + d1 ≥ ds > 0).
     Diffusive {
         conductance: f64,
         cross: [f64; 2],
-        d0: f64,
-        d1: f64,
+        weight0: f64,
     },
     /// Fluid–solid interface (case IV): its record in [`HeatGeometry::interface`] and its
     /// per-step law, both at this position in [`HeatGeometry::interface_faces`].
@@ -277,8 +277,7 @@ impl HeatGeometry {
                 self.face.push(FaceGeometry::Diffusive {
                     conductance: 0.0,
                     cross: [0.0; 2],
-                    d0: 0.0,
-                    d1: 0.0,
+                    weight0: 0.0,
                 });
             } else {
                 let solid = if k0.is_fluid() { k1 } else { k0 };
@@ -475,8 +474,7 @@ impl HeatGeometry {
                     FaceGeometry::Diffusive {
                         conductance,
                         cross,
-                        d0,
-                        d1,
+                        weight0,
                     } => {
                         let es = [d[0] / ds, d[1] / ds];
                         *conductance = area / (ds * cos);
@@ -484,8 +482,10 @@ impl HeatGeometry {
                             area * n[0] - es[0] * area / cos,
                             area * n[1] - es[1] * area / cos,
                         ];
-                        *d0 = dot(sub(xf, x0), es).max(0.0);
-                        *d1 = dot(sub(x1, xf), es).max(0.0);
+                        let d0 = dot(sub(xf, x0), es).max(0.0);
+                        let d1 = dot(sub(x1, xf), es).max(0.0);
+                        // d0 + d1 ≥ (x1 − x0)·e_s = ds > 0 (the clamps only add).
+                        *weight0 = d0 / (d0 + d1);
                     }
                     FaceGeometry::Interface { .. } | FaceGeometry::Boundary { .. } => {}
                 }

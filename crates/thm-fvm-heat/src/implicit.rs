@@ -86,12 +86,11 @@ impl HeatStepper {
                 FaceGeometry::Diffusive {
                     conductance,
                     cross,
-                    d0,
-                    d1,
+                    weight0,
                 } => {
                     let c1 = c1 as usize;
                     let lf =
-                        face_conductivity(self.conductivity[c0], self.conductivity[c1], d0, d1);
+                        face_conductivity(self.conductivity[c0], self.conductivity[c1], weight0);
                     couple(c0, c1, lf * conductance, &mut diag);
                     let cross = [lf * cross[0], lf * cross[1]];
                     let (g0, g1) = (self.gradient[c0], self.gradient[c1]);

@@ -47,14 +47,15 @@ pub(crate) struct InterfaceLaw {
 }
 
 /// λ_f of A-Eq. 47 between cells of conductivity `l0` and `l1`: the harmonic mean weighted
-/// by the distances `d0`, `d1` of the centroids to the face (the arithmetic mean where the
-/// weighted sum vanishes). The face's primary conductance is λ_f times the geometry's
-/// `conductance`, its cross term λ_f times `cross`.
+/// by the distances d0, d1 of the centroids to the face, l0 l1 (d0 + d1) / (d1 l0 + d0 l1) =
+/// l0 l1 / ((1 − w0) l0 + w0 l1) with `weight0` w0 = d0 / (d0 + d1) (the arithmetic mean
+/// where the weighted sum vanishes). The face's primary conductance is λ_f times the
+/// geometry's `conductance`, its cross term λ_f times `cross`.
 #[inline]
-pub(crate) fn face_conductivity(l0: f64, l1: f64, d0: f64, d1: f64) -> f64 {
-    let den = d1 * l0 + d0 * l1;
+pub(crate) fn face_conductivity(l0: f64, l1: f64, weight0: f64) -> f64 {
+    let den = (1.0 - weight0) * l0 + weight0 * l1;
     if den > 0.0 {
-        l0 * l1 * (d0 + d1) / den
+        l0 * l1 / den
     } else {
         0.5 * (l0 + l1)
     }
@@ -892,11 +893,10 @@ impl HeatStepper {
                         FaceGeometry::Diffusive {
                             conductance,
                             cross,
-                            d0,
-                            d1,
+                            weight0,
                         } => {
                             let c1 = c1 as usize;
-                            let lf = face_conductivity(lam[c0], lam[c1], d0, d1);
+                            let lf = face_conductivity(lam[c0], lam[c1], weight0);
                             let (g0, g1) = (grad[c0], grad[c1]);
                             let mean = [0.5 * (g0[0] + g1[0]), 0.5 * (g0[1] + g1[1])];
                             lf * conductance * (temp[c1] - t0)
@@ -1102,10 +1102,9 @@ fn face_stability_conductance(
     match *geo {
         FaceGeometry::Diffusive {
             conductance,
-            d0,
-            d1,
+            weight0,
             ..
-        } => face_conductivity(lam[c0], lam[c1 as usize], d0, d1) * conductance,
+        } => face_conductivity(lam[c0], lam[c1 as usize], weight0) * conductance,
         FaceGeometry::Interface { index, .. } => law[index as usize].g,
         FaceGeometry::Boundary { slot } => {
             let bf = &geometry.boundary[slot as usize];
