@@ -12,10 +12,10 @@
 //!    forces, serially in contact order;
 //! 4. gather and integrate, one pass over the particles: every particle sums its own contacts
 //!    in contact-index order (those that carried force; when at most a quarter of the
-//!    contacts did, only the stamped particles look), plus external force and gravity (no
-//!    floating-point atomics: the same bits for any thread count), then Cundall's non-viscous damping
-//!    (A-Eq. 7) and leapfrog, with the finiteness check (the first bad particle is a minimum
-//!    over indices);
+//!    contacts did, only the stamped particles look: the others would add only zeros), plus
+//!    external force and gravity (no floating-point atomics: the same bits for any thread
+//!    count), then Cundall's non-viscous damping (A-Eq. 7) and leapfrog, with the finiteness
+//!    check (the first bad particle is a minimum over indices);
 //! 5. walls move at their prescribed velocity.
 
 use crate::contact::{
