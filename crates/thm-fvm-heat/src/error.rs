@@ -76,7 +76,7 @@ pub enum HeatError {
         cell: usize,
         /// Sub-step counter of the state when it happened.
         step: u64,
-        /// Time at the start of the failing sub-step [s].
+        /// Time at the start of the failing sub-step \[s\].
         time: f64,
         /// The value.
         value: f64,

@@ -75,7 +75,7 @@ pub(crate) fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum FaceGeometry {
     /// Two cells of the same medium: A-Eq. 47 with λ_f factored out. `conductance` =
-    /// |A| / (ds n·e_s) [m], `cross` = A − e_s |A| / (n·e_s) [m²], and `weight0` =
+    /// |A| / (ds n·e_s) \[m\], `cross` = A − e_s |A| / (n·e_s) \[m²\], and `weight0` =
     /// d0 / (d0 + d1), the share of cell 0 in the link, with d0, d1 the distances of the two
     /// centroids to the face along e_s (harmonic face conductivity; d0 + d1 ≥ ds > 0).
     Diffusive {
@@ -94,9 +94,9 @@ pub(crate) enum FaceGeometry {
 /// record per face in [`HeatGeometry::interface_faces`] order.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct InterfaceFace {
-    /// |A| [m²].
+    /// |A| \[m²\].
     pub area: f64,
-    /// Conductance λ_s |A| / d_{r,c} of the solid half cell [W/K] (d_{r,c} the solid cell's
+    /// Conductance λ_s |A| / d_{r,c} of the solid half cell \[W/K\] (d_{r,c} the solid cell's
     /// centroid-to-face-centroid distance; 0 where it vanishes).
     pub solid_conductance: f64,
     /// The fluid cell.
@@ -112,11 +112,11 @@ pub(crate) struct InterfaceFace {
 pub(crate) struct BoundaryFace {
     /// Index into `HeatModel::sides`.
     pub side: u8,
-    /// Normal distance of the cell centroid to the face [m].
+    /// Normal distance of the cell centroid to the face \[m\].
     pub normal_distance: f64,
-    /// |A| [m²].
+    /// |A| \[m²\].
     pub area: f64,
-    /// Part of centroid → face centroid parallel to the face [m] (non-orthogonal correction).
+    /// Part of centroid → face centroid parallel to the face \[m\] (non-orthogonal correction).
     pub tangent: [f64; 2],
 }
 
@@ -182,7 +182,7 @@ impl HeatGeometry {
         self.porosity
     }
 
-    /// Radius of the circle with the area of each sphere's solid cells [m].
+    /// Radius of the circle with the area of each sphere's solid cells \[m\].
     pub fn sphere_radius(&self) -> &[f64] {
         &self.sphere_radius
     }

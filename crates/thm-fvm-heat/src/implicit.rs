@@ -24,7 +24,7 @@ fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
 }
 
 impl HeatStepper {
-    /// One backward-Euler conduction step of length `dt` [s]. Advection is not part of this
+    /// One backward-Euler conduction step of length `dt` \[s\]. Advection is not part of this
     /// step: any non-zero mass flux in `input` is an error.
     pub fn implicit_step(
         &mut self,

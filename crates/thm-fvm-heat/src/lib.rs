@@ -9,7 +9,7 @@
 //! - **Fluid cells**: the homogeneous energy equation A-Eqs. 30, 37–39, written for the
 //!   temperature with enthalpy h = c_p (T − T_ref) (A-Eqs. 31, 51):
 //!   C_i dT_i/dt = Σ_f D_f − Σ_k ṁ_k c_p,up (T_f − T_ref) + Σ_{S2S} λ_eff A_k (T_j − T_i)/L_k,
-//!   with C_i = V_i Σ_k α_k ρ_k c_p,k. Advection uses the channel mass fluxes ṁ_k [kg/s] of
+//!   with C_i = V_i Σ_k α_k ρ_k c_p,k. Advection uses the channel mass fluxes ṁ_k \[kg/s\] of
 //!   the flow solver with the second-order upwind face value A-Eq. 48,
 //!   T_f = T_up + ψ_up ∇T_up · r, limited by Barth–Jespersen (ψ ∈ [0, 1]).
 //!   Diffusion D_f across a face uses A-Eq. 47: the primary two-point term
@@ -25,7 +25,7 @@
 //!   solid cells of different spheres (contacts) conduct like faces inside a sphere.
 //! - **Boundaries and interfaces**, cases I–IV of Sect. 2.3.1, per side of the mesh
 //!   ([`BoundaryParams`]; sides not listed are adiabatic): I prescribed temperature, constant
-//!   or piecewise linear in time ([`TemperatureSchedule`]); II prescribed flux q [W/m²] into
+//!   or piecewise linear in time ([`TemperatureSchedule`]); II prescribed flux q \[W/m²\] into
 //!   the domain, adiabatic = q = 0; III convective exchange h_e (T_e − T_f); IV fluid–solid
 //!   interface with h_f(T_f − T_c0) = λ_s (T_c1 − T_f)/d_{r,c}, i.e. the series conductance
 //!   |A| / (1/h_f + d_{r,c}/λ_s), with h_f = Nu λ_eff / (2 r) (A-Eq. 45) and Nu from A-Eq. 43
@@ -73,8 +73,8 @@
 //!
 //! ## Units and validity
 //!
-//! SI throughout: T [K], λ [W/(m K)], c_p [J/(kg K)], ρ [kg/m³], ṁ [kg/s], q [W/m²],
-//! h [W/(m² K)], lengths [m]; volumes and face areas are the mesh's areas and lengths times
+//! SI throughout: T \[K\], λ \[W/(m K)\], c_p \[J/(kg K)\], ρ \[kg/m³\], ṁ \[kg/s\], q \[W/m²\],
+//! h \[W/(m² K)\], lengths \[m\]; volumes and face areas are the mesh's areas and lengths times
 //! `PoreMesh::thickness`. Valid for the laminar, low-Mach pore flow of the paper; the
 //! explicit step is stable for sub-steps within the computed limit; faces whose normal and
 //! centroid link are nearly perpendicular (cos ≤ 10⁻³) are rejected (typed error).

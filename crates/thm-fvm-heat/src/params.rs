@@ -9,11 +9,11 @@ use crate::HeatError;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SolidParams {
-    /// Mass density ρ_s [kg/m³] (Table 1: 2600).
+    /// Mass density ρ_s \[kg/m³\] (Table 1: 2600).
     pub density: f64,
-    /// Specific heat c_p [J/(kg K)] (Table 1: 920).
+    /// Specific heat c_p \[J/(kg K)\] (Table 1: 920).
     pub specific_heat: f64,
-    /// Thermal conductivity λ_s [W/(m K)] (Table 1: 3.7).
+    /// Thermal conductivity λ_s \[W/(m K)\] (Table 1: 3.7).
     pub conductivity: f64,
 }
 
@@ -22,11 +22,11 @@ pub struct SolidParams {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PhaseParams {
-    /// Specific heat c_p [J/(kg K)] (water 4187, air 1006).
+    /// Specific heat c_p \[J/(kg K)\] (water 4187, air 1006).
     pub specific_heat: f64,
-    /// Thermal conductivity λ [W/(m K)] (water 0.6, air 0.0262).
+    /// Thermal conductivity λ \[W/(m K)\] (water 0.6, air 0.0262).
     pub conductivity: f64,
-    /// Dynamic viscosity μ [Pa s] (water 10.02e-4, air 2.0507e-5); enters the Reynolds and
+    /// Dynamic viscosity μ \[Pa s\] (water 10.02e-4, air 2.0507e-5); enters the Reynolds and
     /// Prandtl numbers of A-Eqs. 43–44.
     pub dynamic_viscosity: f64,
 }
@@ -36,19 +36,19 @@ pub struct PhaseParams {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(untagged, deny_unknown_fields)]
 pub enum TemperatureSchedule {
-    /// Constant temperature [K].
+    /// Constant temperature \[K\].
     Constant(f64),
-    /// Piecewise-linear table: strictly increasing `time` [s] and `temperature` [K].
+    /// Piecewise-linear table: strictly increasing `time` \[s\] and `temperature` \[K\].
     Table {
-        /// Times [s], strictly increasing.
+        /// Times \[s\], strictly increasing.
         time: Vec<f64>,
-        /// Temperatures [K] at those times.
+        /// Temperatures \[K\] at those times.
         temperature: Vec<f64>,
     },
 }
 
 impl TemperatureSchedule {
-    /// The temperature at time `t` [K].
+    /// The temperature at time `t` \[K\].
     pub fn at(&self, t: f64) -> f64 {
         match self {
             Self::Constant(v) => *v,
@@ -75,24 +75,24 @@ impl TemperatureSchedule {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum BoundaryCondition {
-    /// Case I: prescribed temperature T_bc(t) [K]. Also the temperature of fluid entering
+    /// Case I: prescribed temperature T_bc(t) \[K\]. Also the temperature of fluid entering
     /// through this side.
     Temperature {
         /// The temperature, constant or a table in time.
         temperature: TemperatureSchedule,
     },
-    /// Case II: prescribed heat flux q [W/m²], positive *into* the domain.
+    /// Case II: prescribed heat flux q \[W/m²\], positive *into* the domain.
     HeatFlux {
-        /// Heat flux into the domain [W/m²].
+        /// Heat flux into the domain \[W/m²\].
         flux: f64,
     },
     /// Case II with q = 0.
     Adiabatic,
     /// Case III: convective exchange q = h_e (T_e − T_f) with the surroundings.
     Convective {
-        /// Heat transfer coefficient h_e [W/(m² K)].
+        /// Heat transfer coefficient h_e \[W/(m² K)\].
         coefficient: f64,
-        /// Temperature of the surroundings T_e [K].
+        /// Temperature of the surroundings T_e \[K\].
         ambient_temperature: f64,
     },
 }
@@ -148,7 +148,7 @@ pub struct HeatParams {
     pub liquid: PhaseParams,
     /// Gas phase (`p`) properties.
     pub gas: PhaseParams,
-    /// Reference temperature T_ref of the enthalpy h = c_p (T − T_ref) (A-Eqs. 31, 51) [K].
+    /// Reference temperature T_ref of the enthalpy h = c_p (T − T_ref) (A-Eqs. 31, 51) \[K\].
     pub reference_temperature: f64,
     /// Boundary conditions by side; sides not listed are adiabatic.
     #[serde(default)]
@@ -203,11 +203,11 @@ pub struct Solid {
 }
 
 impl Solid {
-    /// Volumetric heat capacity ρ_s c_p [J/(m³ K)].
+    /// Volumetric heat capacity ρ_s c_p \[J/(m³ K)\].
     pub fn volumetric_heat_capacity(&self) -> f64 {
         self.density * self.specific_heat
     }
-    /// Thermal conductivity [W/(m K)].
+    /// Thermal conductivity \[W/(m K)\].
     pub fn conductivity(&self) -> f64 {
         self.conductivity
     }
@@ -402,7 +402,7 @@ impl HeatModel {
         self.solid
     }
 
-    /// Reference temperature of the enthalpy [K].
+    /// Reference temperature of the enthalpy \[K\].
     pub fn reference_temperature(&self) -> f64 {
         self.reference_temperature
     }

@@ -6,16 +6,16 @@ use crate::params::{HeatModel, Phase};
 /// Effective properties of the homogenised two-phase fluid in one cell.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MixtureProperties {
-    /// ρ_eff = α_q ρ_q + α_p ρ_p (A-Eq. 32) [kg/m³].
+    /// ρ_eff = α_q ρ_q + α_p ρ_p (A-Eq. 32) \[kg/m³\].
     pub density: f64,
-    /// Volumetric heat capacity Σ α_k ρ_k c_p,k [J/(m³ K)].
+    /// Volumetric heat capacity Σ α_k ρ_k c_p,k \[J/(m³ K)\].
     pub volumetric_heat_capacity: f64,
-    /// Mass-weighted specific heat c_p,eff = Σ α_k ρ_k c_p,k / ρ_eff [J/(kg K)] (our reading
+    /// Mass-weighted specific heat c_p,eff = Σ α_k ρ_k c_p,k / ρ_eff \[J/(kg K)\] (our reading
     /// of A-Eq. 36; see the crate docs).
     pub specific_heat: f64,
-    /// λ_eff = Σ α_k λ_k (A-Eq. 34) [W/(m K)].
+    /// λ_eff = Σ α_k λ_k (A-Eq. 34) \[W/(m K)\].
     pub conductivity: f64,
-    /// μ_eff = Σ α_k μ_k (A-Eq. 35) [Pa s].
+    /// μ_eff = Σ α_k μ_k (A-Eq. 35) \[Pa s\].
     pub dynamic_viscosity: f64,
 }
 
@@ -59,7 +59,7 @@ pub fn nusselt(porosity: f64, reynolds: f64, prandtl: f64) -> f64 {
     }
 }
 
-/// Fluid-side heat transfer coefficient h_f = Nu λ_eff / (2 r) (A-Eq. 45) [W/(m² K)], with
+/// Fluid-side heat transfer coefficient h_f = Nu λ_eff / (2 r) (A-Eq. 45) \[W/(m² K)\], with
 /// Re = ρ_eff v (2 r) / μ_eff and Pr = c_p,eff μ_eff / λ_eff.
 pub fn interface_coefficient(
     mix: &MixtureProperties,
@@ -76,11 +76,11 @@ pub fn interface_coefficient(
     nusselt(porosity, re, pr) * mix.conductivity / d
 }
 
-/// Powers of one sphere diameter d = 2r [m] used by the Nusselt correlations.
+/// Powers of one sphere diameter d = 2r \[m\] used by the Nusselt correlations.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct DiameterPowers {
     pub d: f64,
-    /// 1 / d [1/m].
+    /// 1 / d \[1/m\].
     pub inv_d: f64,
     pub d02: f64,
     pub d06: f64,
@@ -154,9 +154,9 @@ pub(crate) fn fifth_root(x: f64) -> f64 {
 /// is a few products with the sphere's [`DiameterPowers`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct ExchangeFactors {
-    /// λ_eff [W/(m K)].
+    /// λ_eff \[W/(m K)\].
     pub conductivity: f64,
-    /// ρ_eff v / μ_eff [1/m].
+    /// ρ_eff v / μ_eff \[1/m\].
     pub x: f64,
     /// x^0.2 Pr^{1/3}, x^0.6 Pr^{1/3}, x^0.7 Pr^{1/3}.
     pub x02: f64,
@@ -217,7 +217,7 @@ impl ExchangeFactors {
     }
 
     /// The factors of a cell with mixture `mix` whose fastest channel carries speed `speed`
-    /// [m/s]: x = ρ_eff v / μ_eff.
+    /// \[m/s\]: x = ρ_eff v / μ_eff.
     #[cfg(test)]
     pub(crate) fn from_speed(mix: &MixtureProperties, speed: f64) -> Self {
         Self::new(mix, mix.density * speed / mix.dynamic_viscosity, None)

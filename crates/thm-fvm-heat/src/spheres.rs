@@ -6,7 +6,7 @@ use thm_vpn_mesh::{CellKind, PoreMesh};
 use crate::HeatError;
 
 /// Writes into `out[j]` the volume-average temperature Σ V_c T_c / Σ V_c of the solid cells
-/// owned by sphere `j` [K], for `j` in `0..=max owner`; `None` for a sphere without solid
+/// owned by sphere `j` \[K\], for `j` in `0..=max owner`; `None` for a sphere without solid
 /// cells. Sums run in cell order (deterministic).
 pub fn sphere_mean_temperatures(
     mesh: &PoreMesh,

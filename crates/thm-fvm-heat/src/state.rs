@@ -9,16 +9,16 @@ use crate::geometry::first_where;
 /// Temperatures of all cells (fluid and solid), struct-of-arrays, owned by the caller.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct HeatState {
-    /// Simulated time [s].
+    /// Simulated time \[s\].
     pub time: f64,
     /// Explicit sub-steps (or implicit steps) taken so far.
     pub steps: u64,
-    /// Cell-centred temperature [K], one per mesh cell.
+    /// Cell-centred temperature \[K\], one per mesh cell.
     pub temperature: Vec<f64>,
 }
 
 impl HeatState {
-    /// All cells at `temperature` [K], at time 0.
+    /// All cells at `temperature` \[K\], at time 0.
     pub fn uniform(mesh: &PoreMesh, temperature: f64) -> Self {
         Self {
             time: 0.0,
@@ -36,14 +36,14 @@ impl HeatState {
 pub struct FlowInput {
     /// Liquid volume fraction α_q ∈ [0, 1] per cell (gas fraction 1 − α_q).
     pub liquid_fraction: Vec<f64>,
-    /// Liquid density ρ_q per cell [kg/m³].
+    /// Liquid density ρ_q per cell \[kg/m³\].
     pub liquid_density: Vec<f64>,
-    /// Gas density ρ_p per cell [kg/m³].
+    /// Gas density ρ_p per cell \[kg/m³\].
     pub gas_density: Vec<f64>,
-    /// Total (both phases) mass flux per channel [kg/s], positive from `channels.cells[k][0]`
+    /// Total (both phases) mass flux per channel \[kg/s\], positive from `channels.cells[k][0]`
     /// to `channels.cells[k][1]`.
     pub channel_mass_flux: Vec<f64>,
-    /// Mass flux through each face [kg/s], positive outward; only boundary faces of fluid
+    /// Mass flux through each face \[kg/s\], positive outward; only boundary faces of fluid
     /// cells may be non-zero (inflow/outflow through the specimen's boundary).
     pub boundary_mass_flux: Vec<f64>,
 }

@@ -40,7 +40,7 @@ pub const ADVECTIVE_FACTOR: f64 = 3.0;
 /// How heat crosses one fluid–solid interface face (case IV); computed once per outer step.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct InterfaceLaw {
-    /// Series conductance |A| h_f k_s / (h_f + k_s) [W/K], k_s = λ_s / d_{r,c}.
+    /// Series conductance |A| h_f k_s / (h_f + k_s) \[W/K\], k_s = λ_s / d_{r,c}.
     pub g: f64,
     /// Weight of cell 0 in the interface temperature.
     pub w0: f64,
@@ -111,9 +111,9 @@ fn pure_phase_prandtl_cbrt(model: &HeatModel, alpha: f64) -> Option<f64> {
 pub struct StepReport {
     /// Number of explicit sub-steps.
     pub substeps: usize,
-    /// Length of each sub-step [s].
+    /// Length of each sub-step \[s\].
     pub substep: f64,
-    /// The stability limit of this step [s] (before the safety factor).
+    /// The stability limit of this step \[s\] (before the safety factor).
     pub stability_limit: f64,
 }
 
@@ -170,7 +170,7 @@ impl HeatStepper {
         Self::default()
     }
 
-    /// Advances `state` by `dt` [s]: prepares the coefficients once, then takes as many equal
+    /// Advances `state` by `dt` \[s\]: prepares the coefficients once, then takes as many equal
     /// explicit sub-steps as the stability limit requires. `geometry` must have been built
     /// (or updated) for `mesh` as it is now.
     pub fn step(
@@ -216,7 +216,7 @@ impl HeatStepper {
         })
     }
 
-    /// The explicit stability limit [s] for this mesh, model and input (without the safety
+    /// The explicit stability limit \[s\] for this mesh, model and input (without the safety
     /// factor): min over cells of C_i / (Σ conductances + 3 Σ outflow ṁ c_p).
     pub fn stable_time_step(
         &mut self,
@@ -483,7 +483,7 @@ impl HeatStepper {
             });
     }
 
-    /// The explicit stability limit [s] with the coefficients of the last [`Self::prepare`]
+    /// The explicit stability limit \[s\] with the coefficients of the last [`Self::prepare`]
     /// (without the safety factor): min over cells of C_i / (Σ conductances + 3 Σ outflow
     /// ṁ c_p); a face conducts λ_f |A| / (ds n·e_s) inside a medium, the series conductance of
     /// an interface, and at a boundary the conductance of its case plus 2 ṁ c_p of an outflow.
@@ -811,7 +811,7 @@ fn limiter_of(
 }
 
 impl HeatStepper {
-    /// Stage 3: heat into the first cell of each face [W]: A-Eq. 47 inside a medium, the
+    /// Stage 3: heat into the first cell of each face \[W\]: A-Eq. 47 inside a medium, the
     /// series conductance at fluid–solid interfaces, cases I–III and advection through open
     /// boundary faces.
     pub fn face_heat(
@@ -948,7 +948,7 @@ impl HeatStepper {
             });
     }
 
-    /// Stage 4: heat carried along each channel from its first to its second cell [W]:
+    /// Stage 4: heat carried along each channel from its first to its second cell \[W\]:
     /// advection ṁ c_p (T_f − T_ref) with the limited second-order upwind value T_f (A-Eq. 48)
     /// at the shared face of T2T channels (first-order upwind in S2S channels, which have no
     /// face) and, in S2S channels, conduction λ_eff A_k (T_i − T_j) / L_k (A-Eq. 40).
@@ -1066,7 +1066,7 @@ impl HeatStepper {
             .reduce(|| None, |a, b| a.or(b))
     }
 
-    /// Total enthalpy Σ C_i (T_i − T_ref) [J] of all cells, with the capacities of the last
+    /// Total enthalpy Σ C_i (T_i − T_ref) \[J\] of all cells, with the capacities of the last
     /// [`Self::prepare`] (summed serially in cell order).
     pub fn total_enthalpy(&self, model: &HeatModel, temp: &[f64]) -> f64 {
         self.capacity
@@ -1076,13 +1076,13 @@ impl HeatStepper {
             .sum()
     }
 
-    /// Heat capacity C_i = V_i (ρ c)_i of each cell [J/K] from the last [`Self::prepare`].
+    /// Heat capacity C_i = V_i (ρ c)_i of each cell \[J/K\] from the last [`Self::prepare`].
     pub fn heat_capacity(&self) -> &[f64] {
         &self.capacity
     }
 }
 
-/// Conductance [W/K] of one face in the stability limit: λ_f |A| / (ds n·e_s) inside a
+/// Conductance \[W/K\] of one face in the stability limit: λ_f |A| / (ds n·e_s) inside a
 /// medium (A-Eq. 47's primary term), the series conductance of a fluid–solid interface, and
 /// at an outer boundary the conductance of its case plus 2 ṁ c_p where fluid flows out (`m`,
 /// the face's boundary mass flux, positive outward).
@@ -1165,7 +1165,7 @@ fn stencil_value(source: u32, temp: &[f64], face_value: &[f64]) -> f64 {
     }
 }
 
-/// Conductance [W/K] between a boundary cell and its surroundings: λ|A|/d_n for case I,
+/// Conductance \[W/K\] between a boundary cell and its surroundings: λ|A|/d_n for case I,
 /// |A| / (1/h_e + d_n/λ) for case III, 0 for case II (the flux is prescribed).
 pub(crate) fn boundary_conductance(
     cond: &SideCondition,

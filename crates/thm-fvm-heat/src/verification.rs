@@ -65,15 +65,15 @@ fn err(e: impl std::fmt::Display) -> CaseError {
 pub struct BarMaterial {
     /// Porosity (fluid volume fraction) of the bar.
     pub porosity: f64,
-    /// Water density [kg/m³].
+    /// Water density \[kg/m³\].
     pub water_density: f64,
-    /// λ_eff = Σ φ_k λ_k (A-Eq. 63) [W/(m K)].
+    /// λ_eff = Σ φ_k λ_k (A-Eq. 63) \[W/(m K)\].
     pub conductivity: f64,
-    /// ρ_eff = Σ φ_k ρ_k (A-Eq. 63) [kg/m³].
+    /// ρ_eff = Σ φ_k ρ_k (A-Eq. 63) \[kg/m³\].
     pub density: f64,
-    /// c_p,eff = Σ φ_k c_p,k (A-Eq. 63 as printed, volume average) [J/(kg K)].
+    /// c_p,eff = Σ φ_k c_p,k (A-Eq. 63 as printed, volume average) \[J/(kg K)\].
     pub specific_heat_volume_average: f64,
-    /// Σ φ_k ρ_k c_p,k: the volumetric heat capacity of the mixture [J/(m³ K)].
+    /// Σ φ_k ρ_k c_p,k: the volumetric heat capacity of the mixture \[J/(m³ K)\].
     pub volumetric_heat_capacity: f64,
 }
 
@@ -95,12 +95,12 @@ impl BarMaterial {
         }
     }
 
-    /// Mass-weighted specific heat (ρc)_eff / ρ_eff [J/(kg K)].
+    /// Mass-weighted specific heat (ρc)_eff / ρ_eff \[J/(kg K)\].
     pub fn specific_heat(&self) -> f64 {
         self.volumetric_heat_capacity / self.density
     }
 
-    /// Effective diffusivity λ_eff / (ρc)_eff [m²/s].
+    /// Effective diffusivity λ_eff / (ρc)_eff \[m²/s\].
     pub fn diffusivity(&self) -> f64 {
         self.conductivity / self.volumetric_heat_capacity
     }
