@@ -302,6 +302,18 @@ fn run_lattice(threads: usize, kin: Kinematics) -> DemState {
     state
 }
 
+/// The bits of every position, velocity, angular velocity and stored shear force.
+fn state_bits(s: &DemState) -> Vec<u64> {
+    let p = &s.particles;
+    p.position
+        .iter()
+        .chain(&p.velocity)
+        .chain(&p.angular_velocity)
+        .chain(s.contacts.history.iter().map(|h| &h.shear_force))
+        .flat_map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
+        .collect()
+}
+
 #[test]
 fn one_and_two_threads_give_identical_bits() {
     for kin in [Kinematics::SpheresInPlane, Kinematics::Spheres3d] {
@@ -312,17 +324,7 @@ fn one_and_two_threads_give_identical_bits() {
             !a.bond_breaks.is_empty(),
             "the test should exercise breakage"
         );
-        let bits = |s: &DemState| -> Vec<u64> {
-            let p = &s.particles;
-            p.position
-                .iter()
-                .chain(&p.velocity)
-                .chain(&p.angular_velocity)
-                .chain(s.contacts.history.iter().map(|h| &h.shear_force))
-                .flat_map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
-                .collect()
-        };
-        assert_eq!(bits(&a), bits(&b));
+        assert_eq!(state_bits(&a), state_bits(&b));
         assert_eq!(a, b);
     }
 }
@@ -638,15 +640,6 @@ fn sparse_contacts_conserve_momentum_and_give_identical_bits() {
     );
     for threads in [2, 3] {
         let (b, _) = run(threads);
-        let bits = |s: &DemState| -> Vec<u64> {
-            let p = &s.particles;
-            p.position
-                .iter()
-                .chain(&p.velocity)
-                .chain(&p.angular_velocity)
-                .flat_map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
-                .collect()
-        };
-        assert_eq!(bits(&a), bits(&b), "{threads} threads");
+        assert_eq!(state_bits(&a), state_bits(&b), "{threads} threads");
     }
 }

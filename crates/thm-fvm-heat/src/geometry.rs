@@ -83,17 +83,19 @@ pub(crate) enum FaceGeometry {
         cross: [f64; 2],
         weight0: f64,
     },
-    /// Fluid–solid interface (case IV): its record in [`HeatGeometry::interface`] and its
-    /// per-step law, both at this position in [`HeatGeometry::interface_faces`].
+    /// Fluid–solid interface (case IV): the position of its record in
+    /// [`HeatGeometry::interface`] and of its per-step law.
     Interface { index: u32 },
     /// Outer boundary: index into [`HeatGeometry::boundary`].
     Boundary { slot: u32 },
 }
 
 /// One fluid–solid interface face (case IV): what the per-step law needs, packed in one
-/// record per face in [`HeatGeometry::interface_faces`] order.
+/// 32-byte record per face, in face order.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct InterfaceFace {
+    /// The face.
+    pub face: u32,
     /// |A| \[m²\].
     pub area: f64,
     /// Conductance λ_s |A| / d_{r,c} of the solid half cell \[W/K\] (d_{r,c} the solid cell's
@@ -106,6 +108,10 @@ pub(crate) struct InterfaceFace {
     /// Whether the fluid cell is cell 0 of the face.
     pub fluid_first: bool,
 }
+
+// The per-face records the step streams through stay this small.
+const _: () = assert!(std::mem::size_of::<FaceGeometry>() == 40);
+const _: () = assert!(std::mem::size_of::<InterfaceFace>() == 32);
 
 /// One outer boundary face (cases I–III).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -130,9 +136,7 @@ pub struct HeatGeometry {
     n_channels: usize,
     pub(crate) face: Vec<FaceGeometry>,
     pub(crate) boundary: Vec<BoundaryFace>,
-    // Faces of class `Interface`, in face order (their per-step law is stored in this order),
-    // and their records.
-    pub(crate) interface_faces: Vec<u32>,
+    // Faces of class `Interface`, in face order (their per-step law is stored in this order).
     pub(crate) interface: Vec<InterfaceFace>,
     // Faces whose temperature is a stencil value (interfaces and boundaries), in face order.
     pub(crate) value_faces: Vec<u32>,
@@ -246,7 +250,6 @@ impl HeatGeometry {
         // Faces: class, and a slot per boundary face in face order.
         self.face.clear();
         self.boundary.clear();
-        self.interface_faces.clear();
         self.interface.clear();
         self.value_faces.clear();
         let continuous = model.interface == InterfaceModel::Continuous;
@@ -286,10 +289,10 @@ impl HeatGeometry {
                     CellKind::Fluid => 0,
                 };
                 self.face.push(FaceGeometry::Interface {
-                    index: self.interface_faces.len() as u32,
+                    index: self.interface.len() as u32,
                 });
-                self.interface_faces.push(f as u32);
                 self.interface.push(InterfaceFace {
+                    face: f as u32,
                     fluid_cell: if k0.is_fluid() { c0 } else { c1 },
                     owner,
                     fluid_first: k0.is_fluid(),
@@ -504,9 +507,8 @@ impl HeatGeometry {
         self.interface
             .par_iter_mut()
             .with_min_len(GRAIN)
-            .zip(self.interface_faces.par_iter())
-            .for_each(|(face, &f)| {
-                let f = f as usize;
+            .for_each(|face| {
+                let f = face.face as usize;
                 let [c0, c1] = mesh.face_cells[f];
                 let solid = if face.fluid_first { c1 } else { c0 } as usize;
                 let r = sub(mesh.face_centroid[f], mesh.cell_centroid[solid]);

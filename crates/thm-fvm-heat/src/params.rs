@@ -4,6 +4,7 @@ use serde::{Deserialize, Serialize};
 use thm_vpn_mesh::{BoundarySide, FaceKind, PoreMesh};
 
 use crate::HeatError;
+use crate::properties::prandtl_cube_root;
 
 /// Thermal properties of the solid (the spheres), Table 1 of Krzaczek et al. (2023).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -221,20 +222,6 @@ pub struct Phase {
     pub(crate) dynamic_viscosity: f64,
 }
 
-impl Phase {
-    /// Pr^{1/3} = (c_p μ / λ)^{1/3}; 0 for a phase that does not conduct (its interface
-    /// coefficient is zero).
-    pub(crate) fn prandtl_cube_root(&self) -> f64 {
-        if self.conductivity > 0.0 {
-            crate::properties::cube_root(
-                self.specific_heat * self.dynamic_viscosity / self.conductivity,
-            )
-        } else {
-            0.0
-        }
-    }
-}
-
 /// Validated boundary condition of one side.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum SideCondition {
@@ -393,7 +380,8 @@ impl HeatModel {
             stability_safety: f,
             gradient: params.gradient,
             interface: params.interface,
-            pure_prandtl_cbrt: [liquid, gas].map(|p| p.prandtl_cube_root()),
+            pure_prandtl_cbrt: [liquid, gas]
+                .map(|p| prandtl_cube_root(p.specific_heat, p.dynamic_viscosity, p.conductivity)),
         })
     }
 

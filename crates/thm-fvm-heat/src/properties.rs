@@ -149,6 +149,17 @@ pub(crate) fn fifth_root(x: f64) -> f64 {
     x * (z2 * z2)
 }
 
+/// Pr^{1/3} = (c_p μ / λ)^{1/3} of a fluid (A-Eqs. 43–44); 0 for one that does not conduct
+/// (its interface coefficient is zero).
+#[inline]
+pub(crate) fn prandtl_cube_root(specific_heat: f64, viscosity: f64, conductivity: f64) -> f64 {
+    if conductivity > 0.0 {
+        cube_root((specific_heat * viscosity / conductivity).max(0.0))
+    } else {
+        0.0
+    }
+}
+
 /// The fluid cell's part of A-Eqs. 43–45: with x = ρ_eff v / μ_eff (Re per unit diameter),
 /// Re^p Pr^{1/3} = (x^p Pr^{1/3}) d^p, so the coefficient of every interface face of the cell
 /// is a few products with the sphere's [`DiameterPowers`].
@@ -192,7 +203,7 @@ impl ExchangeFactors {
             };
         }
         let pr3 = prandtl_cbrt.unwrap_or_else(|| {
-            cube_root((mix.specific_heat * mix.dynamic_viscosity / mix.conductivity).max(0.0))
+            prandtl_cube_root(mix.specific_heat, mix.dynamic_viscosity, mix.conductivity)
         });
         Self {
             conductivity: mix.conductivity,

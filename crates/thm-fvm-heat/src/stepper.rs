@@ -128,7 +128,7 @@ pub struct HeatStepper {
     exchange: Vec<ExchangeFactors>,
     pub(crate) gradient: Vec<[f64; 2]>,
     limiter: Vec<f64>,
-    // Per interface face, in the geometry's `interface_faces` order.
+    // Per interface face, in the order of the geometry's `interface` records.
     pub(crate) interface_law: Vec<InterfaceLaw>,
     // Per value face (interfaces and boundaries), in the geometry's `value_faces` order.
     face_value: Vec<f64>,
@@ -408,7 +408,8 @@ impl HeatStepper {
                     }
                 }
                 for (e, &flag) in exchange.iter_mut().zip(flags) {
-                    if flag & (CELL_FLUID | CELL_INTERFACE) == CELL_FLUID | CELL_INTERFACE {
+                    // Only fluid cells carry the interface flag.
+                    if flag & CELL_INTERFACE != 0 {
                         e.complete_powers();
                     }
                 }
@@ -1211,9 +1212,9 @@ mod tests {
         .unwrap();
         let model = HeatModel::new(&HeatParams::paper_a_table_1(), &mesh).unwrap();
         let geometry = HeatGeometry::new(&model, &mesh).unwrap();
-        assert_eq!(geometry.interface_faces.len(), 1);
+        assert_eq!(geometry.interface.len(), 1);
         assert_eq!(mesh.channels.len(), 1);
-        let f = geometry.interface_faces[0] as usize;
+        let f = geometry.interface[0].face as usize;
         let [c0, c1] = mesh.face_cells[f];
         assert_ne!(c1, NONE);
         let (cf, cs) = if mesh.cell_kind[c0 as usize].is_fluid() {
