@@ -219,6 +219,37 @@ pub struct ContactResponse<V: SpaceVector = Vec3> {
     pub active: bool,
 }
 
+/// What one contact's last step leaves for the caller: the scalars of its
+/// [`ContactResponse`] (the coupling reads the normal stress for the channel aperture,
+/// A-Eq. 8, and the friction work, B-Eq. 32). The force itself is not repeated here: the
+/// history holds its two parts (see [`crate::ContactList::force_on_b`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct ContactReport {
+    /// Normal force \[N\], compression positive, tension negative (intact bonds only).
+    pub normal_force: f64,
+    /// Contact normal stress \[Pa\], compression positive (`F_n / R²`).
+    pub normal_stress: f64,
+    /// Energy dissipated by frictional sliding during the step \[J\] (B-Eq. 32).
+    pub friction_work: f64,
+    /// Set in the step in which the bond broke.
+    pub broke: Option<BreakMode>,
+    /// True while the contact carries force (bonded, or touching).
+    pub active: bool,
+}
+
+impl<V: SpaceVector> From<&ContactResponse<V>> for ContactReport {
+    #[inline]
+    fn from(r: &ContactResponse<V>) -> Self {
+        Self {
+            normal_force: r.normal_force,
+            normal_stress: r.normal_stress,
+            friction_work: r.friction_work,
+            broke: r.broke,
+            active: r.active,
+        }
+    }
+}
+
 /// A contact law: stiffnesses and strengths of a pair (one small seam). The force update
 /// ([`update_contact`]) is shared by every law; a law with a different force update overrides
 /// [`ContactLaw::respond`]. Both are generic over the space, so one law serves spheres and

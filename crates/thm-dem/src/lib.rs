@@ -108,8 +108,10 @@
 //! serde structs validated once ([`StepperParams`], [`CohesiveFrictionalParams`],
 //! [`LinearSpringParams`]); the [`Stepper`] holds only scratch buffers. A step is a fixed
 //! sequence of stages (neighbour update, contact forces, events, gather with integration).
-//! Contacts are computed in parallel (rayon), each writing only its own entry; each particle
-//! then sums its own contacts in contact-index order, so 1 and 2 threads give identical bits.
+//! Contacts are computed in parallel (rayon) by fixed blocks of particles, each contact writing
+//! only its own entry and each block summing the forces on its own particles in contact order;
+//! a particle then adds the shares of contacts from earlier blocks in contact-index order, so
+//! 1 and 2 threads give identical bits (no floating-point atomics).
 //! Neighbour search is an O(N) cell grid with a Verlet skin; a listed pair found apart is not
 //! looked at again until the particles' drift could have closed its gap, so the skin changes
 //! the cost, never the result (a test compares the bits of a wide and a thin skin). Once the
@@ -131,7 +133,7 @@ pub mod verification;
 
 pub use contact::{
     BondRadius, BondState, BreakMode, CohesiveFrictional, CohesiveFrictionalParams, ContactHistory,
-    ContactKinematics, ContactLaw, ContactProperties, ContactResponse, LinearSpring,
+    ContactKinematics, ContactLaw, ContactProperties, ContactReport, ContactResponse, LinearSpring,
     LinearSpringParams, PairInput, ThermalBondParams, update_contact,
 };
 pub use error::DemError;

@@ -1,6 +1,6 @@
 //! Caller-owned state: particles (struct of arrays), contacts with their history, walls.
 
-use crate::contact::{BondState, BreakMode, ContactHistory, ContactResponse};
+use crate::contact::{BondState, BreakMode, ContactHistory, ContactReport};
 use crate::error::DemError;
 use crate::vec3::Vec3;
 use serde::{Deserialize, Serialize};
@@ -331,7 +331,7 @@ impl ParticleState {
     }
 }
 
-/// A list of contacts sorted by pair, with history and the last step's response.
+/// A list of contacts sorted by pair, with history and the last step's report.
 ///
 /// For particle–particle contacts a pair is `[a, b]` with `a < b`; for particle–wall contacts
 /// it is `[particle, wall]`. The stepper checks the order (a particle's contacts as `a` are
@@ -342,8 +342,9 @@ pub struct ContactList {
     pub pair: Vec<[u32; 2]>,
     /// History per contact.
     pub history: Vec<ContactHistory>,
-    /// Last step's response per contact.
-    pub response: Vec<ContactResponse>,
+    /// Last step's report per contact (normal force and stress, friction work, bond
+    /// breakage); the force itself is [`ContactList::force_on_b`].
+    pub report: Vec<ContactReport>,
 }
 
 impl ContactList {
@@ -361,7 +362,7 @@ impl ContactList {
 
     /// Number of contacts carrying force (bonded or touching) in the last step.
     pub fn active_count(&self) -> usize {
-        self.response.iter().filter(|r| r.active).count()
+        self.report.iter().filter(|r| r.active).count()
     }
 
     /// Number of intact bonds.
@@ -380,21 +381,30 @@ impl ContactList {
             .count()
     }
 
+    /// Force on B of contact `k` in the last step \[N\] (A receives its negative):
+    /// `n F_n + F_s` from the normal and shear force the history keeps and the report's normal
+    /// force, the same bits the contact law summed (zero for a contact that carried none).
+    #[inline]
+    pub fn force_on_b(&self, k: usize) -> Vec3 {
+        let h = &self.history[k];
+        h.normal * self.report[k].normal_force + h.shear_force
+    }
+
     /// Friction work of the last step summed over contacts, in contact order \[J\].
     pub fn friction_work(&self) -> f64 {
-        self.response.iter().map(|r| r.friction_work).sum()
+        self.report.iter().map(|r| r.friction_work).sum()
     }
 
     pub(crate) fn clear(&mut self) {
         self.pair.clear();
         self.history.clear();
-        self.response.clear();
+        self.report.clear();
     }
 
     pub(crate) fn push(&mut self, pair: [u32; 2], history: ContactHistory) {
         self.pair.push(pair);
         self.history.push(history);
-        self.response.push(ContactResponse::default());
+        self.report.push(ContactReport::default());
     }
 }
 
@@ -574,14 +584,19 @@ impl DemState {
                 });
             }
         }
-        if self.contacts.history.len() != self.contacts.len()
-            || self.contacts.response.len() != self.contacts.len()
-        {
-            return Err(DemError::LengthMismatch {
-                field: "contacts.history",
-                len: self.contacts.history.len(),
-                expected: self.contacts.len(),
-            });
+        for (field, list) in [
+            ("contacts", &self.contacts),
+            ("wall_contacts", &self.wall_contacts),
+        ] {
+            for len in [list.history.len(), list.report.len()] {
+                if len != list.len() {
+                    return Err(DemError::LengthMismatch {
+                        field,
+                        len,
+                        expected: list.len(),
+                    });
+                }
+            }
         }
         Ok(())
     }

@@ -3,37 +3,46 @@
 //! 1. neighbours: how far the particles moved since the last search (two bounds, one pass);
 //!    cell-grid search and merge of the contact histories when a particle (or wall) moved
 //!    more than half the skin; the per-particle contact index when the lists changed;
-//! 2. contact forces: every contact in parallel, each writing only its own history, response
-//!    and "carried force" flag, and stamping its particles when it carried force (every
-//!    stamp of a step is the same value); a listed pair that does not touch (and is neither
-//!    bonded nor sheared) costs one distance, and is not looked at again until the drift
-//!    since then could have closed its gap; reports whether a bond broke (a boolean OR);
+//! 2. contact forces, block by block of particles (blocks of 512 consecutive indices,
+//!    fixed by the index, never by the thread count) in parallel: a block owns the contacts
+//!    whose first particle it holds (a range of the sorted list) and its particles' wall
+//!    contacts; each contact writes only its own history, report and "carried force" flag;
+//!    the block sums the forces and torques on its own particles in contact order, and a
+//!    contact whose second particle lies in a later block leaves that particle's share in
+//!    the contact's spill entry and stamps the particle (every stamp of a step is the same
+//!    value); a listed pair that does not touch (and is neither bonded nor sheared) costs one
+//!    distance, and is not looked at again until the drift since then could have closed its
+//!    gap; reports whether a bond broke (a boolean OR);
 //! 3. events: broken-bond events (the contacts are scanned only when a bond broke) and wall
 //!    forces, serially in contact order;
-//! 4. gather and integrate, one pass over the particles: every particle sums its own contacts
-//!    in contact-index order (those that carried force; when at most a quarter of the
-//!    contacts did, only the stamped particles look: the others would add only zeros), plus
-//!    external force and gravity (no floating-point atomics: the same bits for any thread
-//!    count), then Cundall's non-viscous damping (A-Eq. 7) and leapfrog, with the finiteness
-//!    check (the first bad particle is a minimum over indices);
+//! 4. gather and integrate, one pass over the particles: every particle sums the spill
+//!    entries of its contacts with earlier blocks in contact-index order (those that carried
+//!    force; when at most a quarter of the contacts did, only the stamped particles look),
+//!    then adds its block's sum, external force and gravity (no floating-point atomics: the
+//!    same bits for any thread count), then Cundall's non-viscous damping (A-Eq. 7) and
+//!    leapfrog, with the finiteness check (the first bad particle is a minimum over indices);
 //! 5. walls move at their prescribed velocity.
+//!
+//! Why blocks: storing every contact's full response for a separate gather to read back
+//! cost more than the contact law itself once the lists outgrow the cache (10⁵ spheres);
+//! a block's own sums stay in cache, and only the contacts that cross a block boundary go
+//! through memory a second time.
 
 use crate::contact::{
-    BondState, ContactHistory, ContactKinematics, ContactLaw, ContactResponse, PairInput,
+    BondState, ContactHistory, ContactKinematics, ContactLaw, ContactReport, PairInput,
 };
 use crate::error::{DemError, check_positive, check_range};
 use crate::neighbour::CellGrid;
-use crate::state::{BondBreak, ContactList, DemState, ParticleState};
+use crate::state::{BondBreak, ContactList, DemState, ParticleState, Wall};
 use crate::vec3::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::ops::Range;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
 /// Loops shorter than this run serially (rayon's dispatch would cost more than the work);
 /// either way every item is computed by the same code, so the bits do not change.
 const PAR_THRESHOLD: usize = 1024;
-/// Smallest chunk handed to a rayon worker.
-const MIN_PAR_LEN: usize = 256;
 
 /// Parameters of the time integration, as read from a file.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -92,20 +101,28 @@ pub struct Stepper<L: ContactLaw> {
     merged: ContactList,
     /// Contacts with `pair[0] == i` are `a_start[i]..a_start[i+1]` (the list is sorted).
     a_start: Vec<u32>,
-    /// Contacts with `pair[1] == i` are `b_entry[b_start[i]..b_start[i+1]]`, ascending.
+    /// Contacts with `pair[1] == i` whose first particle lies in an earlier block (see
+    /// [`BLOCK`]) are `b_entry[b_start[i]..b_start[i+1]]`, ascending: the gather reads their
+    /// spill entries.
     b_start: Vec<u32>,
     b_entry: Vec<u32>,
     /// Wall contacts of particle `i` are `wall_start[i]..wall_start[i+1]` (sorted list).
     wall_start: Vec<u32>,
     cursor: Vec<u32>,
     index_key: Option<(u64, usize, usize, usize)>,
-    /// Whether each contact carried force in this step: the gather skips the others, whose
-    /// force and torques are zero.
+    /// Whether each contact carried force in this step: the gather skips the spill entries
+    /// of the others (not written in this step).
     active: Vec<u8>,
-    wall_active: Vec<u8>,
-    /// `touched[i] == stamp` when particle `i` has a contact that carried force in this step,
-    /// stored by the contact pass itself (used only when few contacts did: the gather then
-    /// skips the other particles). Every store of a step writes the same value, so the
+    /// Force on B and torque on B of a contact whose B lies in a later block than its A,
+    /// written in the step when it carried force.
+    spill: Vec<[Vec3; 2]>,
+    /// Per particle: the sum of the forces (torques) of the contacts that its block owns, in
+    /// contact order (see [`BlockPass::block`]).
+    block_force: Vec<Vec3>,
+    block_torque: Vec<Vec3>,
+    /// `touched[i] == stamp` when a contact of an earlier block left particle `i` a spill
+    /// entry in this step, stored by the contact pass itself (used only when few contacts
+    /// carried force: the gather then reads spill entries only for stamped particles). Every store of a step writes the same value, so the
     /// result does not depend on which thread stores first: relaxed atomics, plain moves on
     /// the common targets, make those concurrent stores defined behaviour.
     touched: Vec<AtomicU32>,
@@ -127,8 +144,9 @@ struct Drift {
     pair: f64,
 }
 
-/// Particles per block of the per-particle passes: blocks are fixed by the index, not by the
-/// thread count, and each is a plain loop over sub-slices (no per-element bounds checks).
+/// Particles per block of the contact pass and of the per-particle passes: blocks are fixed
+/// by the index, not by the thread count (the order of every sum, and so every bit, depends
+/// on this constant only), and each is a plain loop over sub-slices.
 const BLOCK: usize = 512;
 
 impl<L: ContactLaw> Stepper<L> {
@@ -147,7 +165,9 @@ impl<L: ContactLaw> Stepper<L> {
             cursor: Vec::new(),
             index_key: None,
             active: Vec::new(),
-            wall_active: Vec::new(),
+            spill: Vec::new(),
+            block_force: Vec::new(),
+            block_torque: Vec::new(),
             touched: Vec::new(),
             stamp: 0,
             quiet_below: Vec::new(),
@@ -243,11 +263,12 @@ impl<L: ContactLaw> Stepper<L> {
         reserve_to(&mut self.candidates, headroom);
         reserve_to(&mut self.merged.pair, headroom);
         reserve_to(&mut self.merged.history, headroom);
-        reserve_to(&mut self.merged.response, headroom);
+        reserve_to(&mut self.merged.report, headroom);
         reserve_to(&mut state.contacts.pair, headroom);
         reserve_to(&mut state.contacts.history, headroom);
-        reserve_to(&mut state.contacts.response, headroom);
+        reserve_to(&mut state.contacts.report, headroom);
         reserve_to(&mut self.active, headroom);
+        reserve_to(&mut self.spill, headroom);
         reserve_to(&mut self.quiet_below, headroom);
         reserve_to(&mut self.b_entry, headroom);
 
@@ -262,8 +283,6 @@ impl<L: ContactLaw> Stepper<L> {
         }
         merge_contacts(&state.wall_contacts, &self.candidates, &mut self.merged);
         std::mem::swap(&mut state.wall_contacts, &mut self.merged);
-        let wall_headroom = state.wall_contacts.len() + state.wall_contacts.len() / 4 + 16;
-        reserve_to(&mut self.wall_active, wall_headroom);
 
         state.search_reference_position.clear();
         state
@@ -298,7 +317,10 @@ impl<L: ContactLaw> Stepper<L> {
         let (start, entry, cursor) = (&mut self.b_start, &mut self.b_entry, &mut self.cursor);
         start.clear();
         start.resize(n + 1, 0);
-        for p in &state.contacts.pair {
+        // Only the contacts whose two particles lie in different blocks: the block of A
+        // sums the others itself.
+        let foreign = |p: &[u32; 2]| p[0] as usize / BLOCK != p[1] as usize / BLOCK;
+        for p in state.contacts.pair.iter().filter(|p| foreign(p)) {
             start[p[1] as usize + 1] += 1;
         }
         for i in 0..n {
@@ -309,6 +331,9 @@ impl<L: ContactLaw> Stepper<L> {
         cursor.clear();
         cursor.extend_from_slice(&start[..n]);
         for (k, p) in state.contacts.pair.iter().enumerate() {
+            if !foreign(p) {
+                continue;
+            }
             let b = p[1] as usize;
             entry[cursor[b] as usize] = k as u32;
             cursor[b] += 1;
@@ -320,14 +345,18 @@ impl<L: ContactLaw> Stepper<L> {
         Ok(())
     }
 
-    /// Stage 2: forces of all particle–particle and particle–wall contacts, in parallel.
-    /// Returns whether a bond broke in this step (an OR over contacts: the same for any
-    /// thread count), so that stage 3 scans the responses only then, and how many
+    /// Stage 2: forces of all particle–particle and particle–wall contacts, block by block
+    /// of particles in parallel (the blocks are fixed by the index, see [`BLOCK`]). A block
+    /// owns the contacts whose first particle it holds (a range of the sorted list) and its
+    /// particles' wall contacts; it sums every contact's force and torques on its own
+    /// particles into their block sums, in contact order (pairs, then walls), and leaves the
+    /// force and torque on a second particle of a later block in that contact's spill entry
+    /// for the gather. Returns whether a bond broke in this step (an OR over contacts: the
+    /// same for any thread count), so that stage 3 scans the reports only then, and how many
     /// particle–particle contacts carried force. `drift` is the pair bound `D` of [`Drift`]
     /// for this step.
     fn compute_contact_forces(&mut self, state: &mut DemState, drift: f64) -> (bool, usize) {
-        let dt = self.config.params.time_step;
-        let law = &self.law;
+        let n = state.particles.len();
         let DemState {
             particles: p,
             contacts,
@@ -335,186 +364,40 @@ impl<L: ContactLaw> Stepper<L> {
             wall_contacts,
             ..
         } = state;
-        let (x, radius, v, w, t) = (
-            &p.position[..],
-            &p.radius[..],
-            &p.velocity[..],
-            &p.angular_velocity[..],
-            &p.temperature[..],
-        );
         self.active.resize(contacts.len(), 0);
-        self.wall_active.resize(wall_contacts.len(), 0);
-        let (touched, stamp) = (&self.touched[..], self.stamp);
-        type Item<'a> = (
-            (
-                (
-                    (&'a mut ContactHistory, &'a mut ContactResponse),
-                    &'a mut u8,
-                ),
-                &'a mut f64,
-            ),
-            &'a [u32; 2],
-        );
-        let particle_contact = |((((h, r), active), quiet), pair): Item<'_>| {
-            // Proven apart since it was last looked at (below), and its history is still the
-            // cleared one (any evaluation sets the normal; a bond installed meanwhile or a
-            // restored state is seen at once).
-            if drift < *quiet && h.bond != BondState::Intact && is_zero(h.normal) {
-                *active = 0;
-                return 0;
-            }
-            let (a, b) = (pair[0] as usize, pair[1] as usize);
-            let (ra, rb) = (radius[a], radius[b]);
-            let branch = x[b] - x[a];
-            // A listed pair that neither touches nor is bonded nor carries shear costs one
-            // squared distance. Its history's normal doubles as the flag "response already
-            // cleared": every evaluation below sets it to a unit vector.
-            if h.bond != BondState::Intact && is_zero(h.shear_force) {
-                let reach = ra + rb - h.reference_penetration;
-                let d2 = branch.norm_squared();
-                if reach <= 0.0 || d2 >= reach * reach {
-                    if !is_zero(h.normal) {
-                        h.normal = Vec3::ZERO;
-                        *r = ContactResponse::default();
-                    }
-                    // Its gap g closes by at most 2 (D(t) + D(t₀)) by step t: apart while
-                    // D(t) < g/2 − D(t₀) (less a margin far above the round-off of g and D).
-                    if reach > 0.0 {
-                        *quiet = 0.5 * (d2.sqrt() - reach - 1e-9 * reach) - drift;
-                    }
-                    *active = 0;
-                    return 0;
-                }
-            }
-            *quiet = f64::NEG_INFINITY;
-            let kin = ContactKinematics::from_pair(branch, v[b] - v[a], w[a], w[b], ra, rb, dt);
-            let input = PairInput {
-                radius_a: ra,
-                radius_b: rb,
-                temperature: 0.5 * (t[a] + t[b]),
-            };
-            *r = law.respond(&input, &kin, h);
-            *active = u8::from(r.active);
-            if r.active {
-                touched[a].store(stamp, Relaxed);
-                touched[b].store(stamp, Relaxed);
-            }
-            // Bit 0: a bond broke; bit 1: the contact carried force.
-            u8::from(r.broke.is_some()) | (*active << 1)
+        self.spill.resize(contacts.len(), [Vec3::ZERO; 2]);
+        self.block_force.resize(n, Vec3::ZERO);
+        self.block_torque.resize(n, Vec3::ZERO);
+        let pass = BlockPass {
+            law: &self.law,
+            dt: self.config.params.time_step,
+            drift,
+            n,
+            position: &p.position,
+            radius: &p.radius,
+            velocity: &p.velocity,
+            angular_velocity: &p.angular_velocity,
+            temperature: &p.temperature,
+            walls,
+            a_start: &self.a_start,
+            wall_start: &self.wall_start,
+            touched: &self.touched,
+            stamp: self.stamp,
         };
-        // Blocks of contacts, each a plain loop (the per-item cost of rayon's adaptors is
-        // comparable to that of a listed pair that does not touch).
-        type Chunk<'a> = (
-            (
-                (
-                    (&'a mut [ContactHistory], &'a mut [ContactResponse]),
-                    &'a mut [u8],
-                ),
-                &'a mut [f64],
-            ),
-            &'a [[u32; 2]],
-        );
-        let chunk = |((((h, r), a), q), p): Chunk<'_>| {
-            h.iter_mut()
-                .zip(r.iter_mut())
-                .zip(a.iter_mut())
-                .zip(q.iter_mut())
-                .zip(p.iter())
-                .fold((false, 0), |(broke, count), item| {
-                    let bits = particle_contact(item);
-                    (broke | (bits & 1 != 0), count + usize::from(bits >> 1))
-                })
+        let slices = BlockSlices {
+            pair: &contacts.pair,
+            history: &mut contacts.history,
+            report: &mut contacts.report,
+            active: &mut self.active,
+            quiet: &mut self.quiet_below,
+            spill: &mut self.spill,
+            wall_pair: &wall_contacts.pair,
+            wall_history: &mut wall_contacts.history,
+            wall_report: &mut wall_contacts.report,
+            force: &mut self.block_force,
+            torque: &mut self.block_torque,
         };
-        let (any_broke, active_count) = if contacts.len() >= PAR_THRESHOLD {
-            contacts
-                .history
-                .par_chunks_mut(MIN_PAR_LEN)
-                .zip(contacts.response.par_chunks_mut(MIN_PAR_LEN))
-                .zip(self.active.par_chunks_mut(MIN_PAR_LEN))
-                .zip(self.quiet_below.par_chunks_mut(MIN_PAR_LEN))
-                .zip(contacts.pair.par_chunks(MIN_PAR_LEN))
-                .map(chunk)
-                .reduce(|| (false, 0), |x, y| (x.0 | y.0, x.1 + y.1))
-        } else {
-            chunk((
-                (
-                    (
-                        (&mut contacts.history[..], &mut contacts.response[..]),
-                        &mut self.active[..],
-                    ),
-                    &mut self.quiet_below[..],
-                ),
-                &contacts.pair[..],
-            ))
-        };
-        let walls: &[crate::state::Wall] = walls;
-        type WallItem<'a> = (
-            (
-                (&'a mut ContactHistory, &'a mut ContactResponse),
-                &'a mut u8,
-            ),
-            &'a [u32; 2],
-        );
-        let wall_contact = |(((h, r), active), pair): WallItem<'_>| {
-            let (a, wall) = (pair[0] as usize, &walls[pair[1] as usize]);
-            let ra = radius[a];
-            // As for pairs: apart, unbonded and without shear costs one distance.
-            if h.bond != BondState::Intact && is_zero(h.shear_force) {
-                let gap = (x[a] - wall.point).dot(wall.normal);
-                if ra - gap - h.reference_penetration <= 0.0 {
-                    if !is_zero(h.normal) {
-                        h.normal = Vec3::ZERO;
-                        *r = ContactResponse::default();
-                    }
-                    *active = 0;
-                    return;
-                }
-            }
-            let kin = ContactKinematics::from_wall(
-                x[a],
-                v[a],
-                w[a],
-                ra,
-                wall.point,
-                wall.normal,
-                wall.velocity,
-                dt,
-            );
-            let input = PairInput {
-                radius_a: ra,
-                radius_b: ra,
-                temperature: t[a],
-            };
-            *r = law.respond(&input, &kin, h);
-            *active = u8::from(r.active);
-            if r.active {
-                touched[a].store(stamp, Relaxed);
-            }
-        };
-        if wall_contacts.len() >= PAR_THRESHOLD {
-            wall_contacts
-                .history
-                .par_chunks_mut(MIN_PAR_LEN)
-                .zip(wall_contacts.response.par_chunks_mut(MIN_PAR_LEN))
-                .zip(self.wall_active.par_chunks_mut(MIN_PAR_LEN))
-                .zip(wall_contacts.pair.par_chunks(MIN_PAR_LEN))
-                .for_each(|(((h, r), a), p)| {
-                    h.iter_mut()
-                        .zip(r.iter_mut())
-                        .zip(a.iter_mut())
-                        .zip(p.iter())
-                        .for_each(wall_contact)
-                });
-        } else {
-            wall_contacts
-                .history
-                .iter_mut()
-                .zip(wall_contacts.response.iter_mut())
-                .zip(self.wall_active.iter_mut())
-                .zip(wall_contacts.pair.iter())
-                .for_each(wall_contact);
-        }
-        (any_broke, active_count)
+        pass.over_blocks(0..n.div_ceil(BLOCK), slices)
     }
 
     /// A new stamp for this step's contact pass (see `touched`), with `touched` sized for
@@ -535,7 +418,7 @@ impl<L: ContactLaw> Stepper<L> {
     /// stage 2 reported a break) and the forces on the walls.
     fn collect_events(&self, state: &mut DemState, any_broke: bool) {
         if any_broke {
-            for (pair, r) in state.contacts.pair.iter().zip(&state.contacts.response) {
+            for (pair, r) in state.contacts.pair.iter().zip(&state.contacts.report) {
                 if let Some(mode) = r.broke {
                     state.bond_breaks.push(BondBreak {
                         a: pair[0],
@@ -549,19 +432,17 @@ impl<L: ContactLaw> Stepper<L> {
         for w in &mut state.walls {
             w.force = Vec3::ZERO;
         }
-        for (pair, r) in state
-            .wall_contacts
-            .pair
-            .iter()
-            .zip(&state.wall_contacts.response)
-        {
-            state.walls[pair[1] as usize].force += r.force_on_b;
+        let list = &state.wall_contacts;
+        for (k, pair) in list.pair.iter().enumerate() {
+            if list.report[k].active {
+                state.walls[pair[1] as usize].force += list.force_on_b(k);
+            }
         }
     }
 
-    /// Stages 4 and 5 in one pass over the particles: each sums its own contacts in
-    /// contact-index order (as `b`, then as `a`, then its walls; contacts that carried no
-    /// force are skipped, adding their zeros would not change a bit), plus external force and
+    /// Stages 4 and 5 in one pass over the particles: each sums the spill entries of its
+    /// contacts with earlier blocks in contact-index order (those that carried force), then
+    /// adds the sum its own block formed (see [`BlockPass::block`]), external force and
     /// gravity; then Cundall's non-viscous damping (A-Eq. 7) and the leapfrog update, with the
     /// finiteness check (the first bad particle is a minimum over indices). Fixed particles
     /// move at their prescribed velocity; plane kinematics keep `z = 0`, `v_z = 0`,
@@ -571,12 +452,6 @@ impl<L: ContactLaw> Stepper<L> {
         let dt = self.config.params.time_step;
         let alpha = self.config.params.damping;
         let step = state.step;
-        let DemState {
-            particles,
-            contacts,
-            wall_contacts,
-            ..
-        } = state;
         let ParticleState {
             kinematics,
             position,
@@ -590,13 +465,12 @@ impl<L: ContactLaw> Stepper<L> {
             force,
             torque,
             ..
-        } = particles;
+        } = &mut state.particles;
         let planar = kinematics.is_planar();
         let n = position.len();
-        let (resp, active) = (&contacts.response[..], &self.active[..]);
-        let (wresp, wactive) = (&wall_contacts.response[..], &self.wall_active[..]);
-        let (a_start, b_start, b_entry) = (&self.a_start[..], &self.b_start[..], &self.b_entry);
-        let wall_start = &self.wall_start[..];
+        let (spill, active) = (&self.spill[..], &self.active[..]);
+        let (b_start, b_entry) = (&self.b_start[..], &self.b_entry);
+        let (block_force, block_torque) = (&self.block_force[..], &self.block_torque[..]);
         let (touched, stamp) = (&self.touched[..], self.stamp);
         type Block<'a> = (
             usize,
@@ -616,8 +490,7 @@ impl<L: ContactLaw> Stepper<L> {
             let mut first_bad = usize::MAX;
             let ranges = b_start[s..=e]
                 .windows(2)
-                .zip(a_start[s..=e].windows(2))
-                .zip(wall_start[s..=e].windows(2));
+                .zip(block_force[s..e].iter().zip(&block_torque[s..e]));
             let loads = fixed[s..e]
                 .iter()
                 .zip(external_force[s..e].iter().zip(&external_torque[s..e]));
@@ -625,7 +498,7 @@ impl<L: ContactLaw> Stepper<L> {
                 j,
                 (
                     ((((((x, v), w), f_out), t_out), (&m, &inertia)), (&fixed, (fe, te))),
-                    ((b_range, a_range), w_range),
+                    (b_range, (f_block, t_block)),
                 ),
             ) in xs
                 .iter_mut()
@@ -645,25 +518,13 @@ impl<L: ContactLaw> Stepper<L> {
                     for &k in &b_entry[b_range[0] as usize..b_range[1] as usize] {
                         let k = k as usize;
                         if active[k] != 0 {
-                            fi += resp[k].force_on_b;
-                            ti += resp[k].torque_on_b;
-                        }
-                    }
-                    let own = a_range[0] as usize..a_range[1] as usize;
-                    for (r, &on) in resp[own.clone()].iter().zip(&active[own]) {
-                        if on != 0 {
-                            fi -= r.force_on_b;
-                            ti += r.torque_on_a;
-                        }
-                    }
-                    let own = w_range[0] as usize..w_range[1] as usize;
-                    for (r, &on) in wresp[own.clone()].iter().zip(&wactive[own]) {
-                        if on != 0 {
-                            fi -= r.force_on_b;
-                            ti += r.torque_on_a;
+                            fi += spill[k][0];
+                            ti += spill[k][1];
                         }
                     }
                 }
+                fi += *f_block;
+                ti += *t_block;
                 *f_out = fi + *fe + g * m;
                 *t_out = ti + *te;
                 if !fixed {
@@ -718,6 +579,257 @@ impl<L: ContactLaw> Stepper<L> {
             }),
             None => Ok(()),
         }
+    }
+}
+
+/// The mutable per-contact and per-particle slices of a run of whole blocks: contacts
+/// `a_start[s]..a_start[e]`, wall contacts `wall_start[s]..wall_start[e]` and the block sums
+/// of particles `s..e`.
+struct BlockSlices<'a> {
+    pair: &'a [[u32; 2]],
+    history: &'a mut [ContactHistory],
+    report: &'a mut [ContactReport],
+    active: &'a mut [u8],
+    quiet: &'a mut [f64],
+    spill: &'a mut [[Vec3; 2]],
+    wall_pair: &'a [[u32; 2]],
+    wall_history: &'a mut [ContactHistory],
+    wall_report: &'a mut [ContactReport],
+    force: &'a mut [Vec3],
+    torque: &'a mut [Vec3],
+}
+
+impl<'a> BlockSlices<'a> {
+    /// Splits before contact `c`, wall contact `w` and particle `i` (offsets into `self`).
+    fn split(self, c: usize, w: usize, i: usize) -> (Self, Self) {
+        let (pair, pair_rest) = self.pair.split_at(c);
+        let (history, history_rest) = self.history.split_at_mut(c);
+        let (report, report_rest) = self.report.split_at_mut(c);
+        let (active, active_rest) = self.active.split_at_mut(c);
+        let (quiet, quiet_rest) = self.quiet.split_at_mut(c);
+        let (spill, spill_rest) = self.spill.split_at_mut(c);
+        let (wall_pair, wall_pair_rest) = self.wall_pair.split_at(w);
+        let (wall_history, wall_history_rest) = self.wall_history.split_at_mut(w);
+        let (wall_report, wall_report_rest) = self.wall_report.split_at_mut(w);
+        let (force, force_rest) = self.force.split_at_mut(i);
+        let (torque, torque_rest) = self.torque.split_at_mut(i);
+        (
+            Self {
+                pair,
+                history,
+                report,
+                active,
+                quiet,
+                spill,
+                wall_pair,
+                wall_history,
+                wall_report,
+                force,
+                torque,
+            },
+            Self {
+                pair: pair_rest,
+                history: history_rest,
+                report: report_rest,
+                active: active_rest,
+                quiet: quiet_rest,
+                spill: spill_rest,
+                wall_pair: wall_pair_rest,
+                wall_history: wall_history_rest,
+                wall_report: wall_report_rest,
+                force: force_rest,
+                torque: torque_rest,
+            },
+        )
+    }
+}
+
+/// What every block of the contact pass reads.
+struct BlockPass<'a, L> {
+    law: &'a L,
+    dt: f64,
+    drift: f64,
+    n: usize,
+    position: &'a [Vec3],
+    radius: &'a [f64],
+    velocity: &'a [Vec3],
+    angular_velocity: &'a [Vec3],
+    temperature: &'a [f64],
+    walls: &'a [Wall],
+    a_start: &'a [u32],
+    wall_start: &'a [u32],
+    touched: &'a [AtomicU32],
+    stamp: u32,
+}
+
+impl<L: ContactLaw> BlockPass<'_, L> {
+    /// The first particle, contact and wall contact of block `c` (`c` may be one past the
+    /// last block).
+    fn block_start(&self, c: usize) -> (usize, usize, usize) {
+        let s = (c * BLOCK).min(self.n);
+        (s, self.a_start[s] as usize, self.wall_start[s] as usize)
+    }
+
+    /// Blocks `blocks` (whose slices are `slices`): halves in parallel (rayon's join) while
+    /// a half holds enough contacts, then block after block. Returns (a bond broke, number
+    /// of particle–particle contacts that carried force): an OR and an integer sum, the same
+    /// for any split.
+    fn over_blocks(&self, blocks: Range<usize>, slices: BlockSlices<'_>) -> (bool, usize) {
+        let (s0, c0, w0) = self.block_start(blocks.start);
+        if blocks.len() > 1 && slices.pair.len() + slices.wall_pair.len() >= 2 * PAR_THRESHOLD {
+            let mid = blocks.start + blocks.len() / 2;
+            let (s, c, w) = self.block_start(mid);
+            let (low, high) = slices.split(c - c0, w - w0, s - s0);
+            let (x, y) = rayon::join(
+                || self.over_blocks(blocks.start..mid, low),
+                || self.over_blocks(mid..blocks.end, high),
+            );
+            return (x.0 | y.0, x.1 + y.1);
+        }
+        let mut rest = slices;
+        let (mut broke, mut count) = (false, 0);
+        for c in blocks {
+            let (s, c_start, w_start) = self.block_start(c);
+            let (e, c_end, w_end) = self.block_start(c + 1);
+            let (block, tail) = rest.split(c_end - c_start, w_end - w_start, e - s);
+            let (b, k) = self.block(s, e, block);
+            broke |= b;
+            count += k;
+            rest = tail;
+        }
+        (broke, count)
+    }
+
+    /// One block: particles `s..e`, their contacts as first particle, then their wall
+    /// contacts, in list order.
+    fn block(&self, s: usize, e: usize, out: BlockSlices<'_>) -> (bool, usize) {
+        let BlockSlices {
+            pair,
+            history,
+            report,
+            active,
+            quiet,
+            spill,
+            wall_pair,
+            wall_history,
+            wall_report,
+            force,
+            torque,
+        } = out;
+        force.fill(Vec3::ZERO);
+        torque.fill(Vec3::ZERO);
+        let (x, radius, v, w, t) = (
+            self.position,
+            self.radius,
+            self.velocity,
+            self.angular_velocity,
+            self.temperature,
+        );
+        let (drift, dt) = (self.drift, self.dt);
+        let (mut broke, mut count) = (false, 0);
+        for (((((h, rep), on), q), sp), pair) in history
+            .iter_mut()
+            .zip(report.iter_mut())
+            .zip(active.iter_mut())
+            .zip(quiet.iter_mut())
+            .zip(spill.iter_mut())
+            .zip(pair)
+        {
+            // Proven apart since it was last looked at (below), and its history is still the
+            // cleared one (any evaluation sets the normal; a bond installed meanwhile or a
+            // restored state is seen at once).
+            if drift < *q && h.bond != BondState::Intact && is_zero(h.normal) {
+                *on = 0;
+                continue;
+            }
+            let (a, b) = (pair[0] as usize, pair[1] as usize);
+            let (ra, rb) = (radius[a], radius[b]);
+            let branch = x[b] - x[a];
+            // A listed pair that neither touches nor is bonded nor carries shear costs one
+            // squared distance. Its history's normal doubles as the flag "report already
+            // cleared": every evaluation below sets it to a unit vector.
+            if h.bond != BondState::Intact && is_zero(h.shear_force) {
+                let reach = ra + rb - h.reference_penetration;
+                let d2 = branch.norm_squared();
+                if reach <= 0.0 || d2 >= reach * reach {
+                    if !is_zero(h.normal) {
+                        h.normal = Vec3::ZERO;
+                        *rep = ContactReport::default();
+                    }
+                    // Its gap g closes by at most 2 (D(t) + D(t₀)) by step t: apart while
+                    // D(t) < g/2 − D(t₀) (less a margin far above the round-off of g and D).
+                    if reach > 0.0 {
+                        *q = 0.5 * (d2.sqrt() - reach - 1e-9 * reach) - drift;
+                    }
+                    *on = 0;
+                    continue;
+                }
+            }
+            *q = f64::NEG_INFINITY;
+            let kin = ContactKinematics::from_pair(branch, v[b] - v[a], w[a], w[b], ra, rb, dt);
+            let input = PairInput {
+                radius_a: ra,
+                radius_b: rb,
+                temperature: 0.5 * (t[a] + t[b]),
+            };
+            let r = self.law.respond(&input, &kin, h);
+            *rep = ContactReport::from(&r);
+            *on = u8::from(r.active);
+            broke |= r.broke.is_some();
+            if r.active {
+                count += 1;
+                force[a - s] -= r.force_on_b;
+                torque[a - s] += r.torque_on_a;
+                if b < e {
+                    force[b - s] += r.force_on_b;
+                    torque[b - s] += r.torque_on_b;
+                } else {
+                    *sp = [r.force_on_b, r.torque_on_b];
+                    self.touched[b].store(self.stamp, Relaxed);
+                }
+            }
+        }
+        for ((h, rep), pair) in wall_history
+            .iter_mut()
+            .zip(wall_report.iter_mut())
+            .zip(wall_pair)
+        {
+            let (a, wall) = (pair[0] as usize, &self.walls[pair[1] as usize]);
+            let ra = radius[a];
+            // As for pairs: apart, unbonded and without shear costs one distance.
+            if h.bond != BondState::Intact && is_zero(h.shear_force) {
+                let gap = (x[a] - wall.point).dot(wall.normal);
+                if ra - gap - h.reference_penetration <= 0.0 {
+                    if !is_zero(h.normal) {
+                        h.normal = Vec3::ZERO;
+                        *rep = ContactReport::default();
+                    }
+                    continue;
+                }
+            }
+            let kin = ContactKinematics::from_wall(
+                x[a],
+                v[a],
+                w[a],
+                ra,
+                wall.point,
+                wall.normal,
+                wall.velocity,
+                dt,
+            );
+            let input = PairInput {
+                radius_a: ra,
+                radius_b: ra,
+                temperature: t[a],
+            };
+            let r = self.law.respond(&input, &kin, h);
+            *rep = ContactReport::from(&r);
+            if r.active {
+                force[a - s] -= r.force_on_b;
+                torque[a - s] += r.torque_on_a;
+            }
+        }
+        (broke, count)
     }
 }
 
@@ -835,14 +947,14 @@ fn merge_contacts(old: &ContactList, candidates: &[[u32; 2]], out: &mut ContactL
             if old.history[k].bond == BondState::Intact {
                 out.pair.push(old.pair[k]);
                 out.history.push(old.history[k]);
-                out.response.push(old.response[k]);
+                out.report.push(old.report[k]);
             }
             k += 1;
         }
         if k < old.len() && old.pair[k] == c {
             out.pair.push(c);
             out.history.push(old.history[k]);
-            out.response.push(old.response[k]);
+            out.report.push(old.report[k]);
             k += 1;
         } else {
             out.push(c, ContactHistory::UNBONDED);
@@ -852,7 +964,7 @@ fn merge_contacts(old: &ContactList, candidates: &[[u32; 2]], out: &mut ContactL
         if old.history[k].bond == BondState::Intact {
             out.pair.push(old.pair[k]);
             out.history.push(old.history[k]);
-            out.response.push(old.response[k]);
+            out.report.push(old.report[k]);
         }
         k += 1;
     }
@@ -876,7 +988,7 @@ pub fn critical_time_step<L: ContactLaw>(state: &DemState, law: &L) -> f64 {
         .pair
         .iter()
         .zip(&state.contacts.history)
-        .zip(&state.contacts.response)
+        .zip(&state.contacts.report)
     {
         if !(r.active || h.bond == BondState::Intact) {
             continue;

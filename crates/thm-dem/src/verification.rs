@@ -548,7 +548,7 @@ pub fn uniaxial_tension(test: &TensionTest) -> Result<TensionResult, DemError> {
         result.stress.push(stress);
         let tensile = state
             .contacts
-            .response
+            .report
             .iter()
             .filter(|r| r.active && r.normal_force < 0.0)
             .map(|r| -r.normal_force);

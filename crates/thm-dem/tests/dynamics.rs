@@ -117,11 +117,14 @@ fn bond_breaks_in_a_run_at_t_r_squared_and_is_reported() {
     while state.bond_breaks.is_empty() {
         stepper.step(&mut state).unwrap();
         if state.bond_breaks.is_empty() {
-            carried = carried.max(-state.contacts.response[0].normal_force);
+            carried = carried.max(-state.contacts.report[0].normal_force);
             // Force on the grip = tension of the bond (Newton's third law).
             assert!(
-                (state.particles.force[1].x - state.contacts.response[0].normal_force).abs() < 1e-9
+                (state.particles.force[1].x - state.contacts.report[0].normal_force).abs() < 1e-9
             );
+            // The contact's force as the list reports it is the force the particles received.
+            assert_eq!(state.contacts.force_on_b(0), state.particles.force[1]);
+            assert_eq!(-state.contacts.force_on_b(0), state.particles.force[0]);
         }
         assert!(state.step < 10_000_000);
     }
@@ -262,7 +265,7 @@ fn heating_a_bonded_pair_builds_the_thermal_contact_force() {
     let (ra1, rb1) = (state.particles.radius[0], state.particles.radius[1]);
     let kn = 3.36e9 * 2.0 * ra1 * rb1 / (ra1 + rb1);
     let expected = kn * alpha * d_t * (ra + rb);
-    let fnorm = state.contacts.response[0].normal_force;
+    let fnorm = state.contacts.report[0].normal_force;
     assert!(
         (fnorm - expected).abs() <= 1e-9 * expected,
         "{fnorm} vs {expected}"

@@ -459,7 +459,7 @@ impl Scenario for DemTensionBar {
         for k in 0..c.len() {
             if c.history[k].bond == BondState::Intact {
                 self.bond_lines.push(c.pair[k]);
-                self.bond_normal_force.push(c.response[k].normal_force);
+                self.bond_normal_force.push(c.report[k].normal_force);
             }
         }
         let bonds = UnstructuredGrid::lines(&self.positions, &self.bond_lines).with_cell_field(
