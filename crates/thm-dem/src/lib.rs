@@ -37,7 +37,8 @@
 //!
 //! **Friction work** (B-Eq. 32): per contact and step, `E_f = |F_s| (|F_s,trial| − |F_s|)/K_s`,
 //! i.e. `f_t v_t Δt` with `v_t` the *sliding* part of the tangential velocity
-//! ([`ContactResponse::friction_work`]); summed by [`ContactList::friction_work`].
+//! ([`ContactResponse::friction_work`], kept per contact in [`ContactReport`]); summed by
+//! [`ContactList::friction_work`].
 //!
 //! **Thermal expansion**: incremental A-Eq. 55 `r^{n+1} = r^n (1 + α_exp (T^{n+1} − T^n))`
 //! ([`ParticleState::expand_incremental`]) and from a reference radius B-Eq. 37
