@@ -91,7 +91,8 @@ impl StepperConfig {
 }
 
 /// Advances a [`DemState`] with a contact law. Holds only scratch buffers (neighbour grid,
-/// per-particle contact index, particle records), so one stepper can advance any state.
+/// per-particle contact index, block sums, spill entries, bounds of pairs proven apart),
+/// so one stepper can advance any state.
 #[derive(Debug)]
 pub struct Stepper<L: ContactLaw> {
     law: L,
