@@ -519,7 +519,6 @@ fn verlet_skin_and_skipped_pairs_do_not_change_a_bit() {
     };
     let wide = run(3e-4);
     let thin = run(1e-9);
-    // The wide list holds many pairs that do not touch; the thin one was rebuilt often.
     // The wide list holds many pairs that do not touch (so few carry force that the gather
     // skips the particles without one); the thin one holds little else and was rebuilt often.
     let (wide_active, thin_active) = (wide.contacts.active_count(), thin.contacts.active_count());
@@ -573,10 +572,12 @@ fn a_stepper_carries_nothing_from_one_state_to_another() {
     assert_eq!(again, first);
 }
 
-/// An 8 × 8 × 8 jittered lattice of spheres above a floor, with a linear spring + Coulomb law
-/// (the setting of the Verlet-skin and stepper-reuse tests).
+/// An 8 × 8 × 12 jittered lattice of spheres above a floor, with a linear spring + Coulomb law
+/// (the setting of the Verlet-skin and stepper-reuse tests). 768 spheres: two blocks of the
+/// contact pass (512 and 256), so that the contacts across the block boundary go through
+/// their spill entries.
 fn frictional_lattice_on_floor(seed: u64, jitter: f64) -> (DemState, LinearSpring) {
-    let p = jittered_lattice(Kinematics::Spheres3d, 8, 8, 8, seed, jitter);
+    let p = jittered_lattice(Kinematics::Spheres3d, 8, 8, 12, seed, jitter);
     let floor = Wall::new(Vec3::new(0.0, 0.0, -6e-4), Vec3::new(0.0, 0.0, 1.0)).unwrap();
     let law = LinearSpringParams {
         normal_stiffness: 2e4,
