@@ -68,6 +68,14 @@ impl<V: SpaceVector> ContactHistory<V> {
             ..Self::UNBONDED
         }
     }
+
+    /// The total force on B, `n F_n + F_s`, from this history's normal and shear force and
+    /// the normal force `F_n` \[N\]: the one expression [`update_contact`] sums and
+    /// [`crate::ContactList::force_on_b`] rebuilds, so both give the same bits.
+    #[inline]
+    pub fn force_on_b(&self, normal_force: f64) -> V {
+        self.normal * normal_force + self.shear_force
+    }
 }
 
 /// Kinematics of one contact over one step (what the law needs from the geometry).
@@ -356,7 +364,7 @@ pub fn update_contact<V: SpaceVector>(
         }
     }
     history.shear_force = shear;
-    let force_on_b = n * normal_force + shear;
+    let force_on_b = history.force_on_b(normal_force);
     // Both levers lie along the normal: (arm_a n) × (−F) = −arm_a (n × F) and
     // (−arm_b n) × F = −arm_b (n × F), one cross product.
     let moment = V::moment(n, force_on_b);

@@ -386,8 +386,7 @@ impl ContactList {
     /// force, the same bits the contact law summed (zero for a contact that carried none).
     #[inline]
     pub fn force_on_b(&self, k: usize) -> Vec3 {
-        let h = &self.history[k];
-        h.normal * self.report[k].normal_force + h.shear_force
+        self.history[k].force_on_b(self.report[k].normal_force)
     }
 
     /// Friction work of the last step summed over contacts, in contact order \[J\].

@@ -112,7 +112,9 @@ pub struct Stepper<L: ContactLaw> {
     cursor: Vec<u32>,
     index_key: Option<(u64, usize, usize, usize)>,
     /// Whether each contact carried force in this step: the gather skips the spill entries
-    /// of the others (not written in this step).
+    /// of the others (not written in this step). The report's `active` flag again, one byte
+    /// per contact, because the gather reads it at random (a 32-byte report per read would
+    /// cost a cache line).
     active: Vec<u8>,
     /// Force on B and torque on B of a contact whose B lies in a later block than its A,
     /// written in the step when it carried force.
@@ -123,9 +125,10 @@ pub struct Stepper<L: ContactLaw> {
     block_torque: Vec<Vec3>,
     /// `touched[i] == stamp` when a contact of an earlier block left particle `i` a spill
     /// entry in this step, stored by the contact pass itself (used only when few contacts
-    /// carried force: the gather then reads spill entries only for stamped particles). Every store of a step writes the same value, so the
-    /// result does not depend on which thread stores first: relaxed atomics, plain moves on
-    /// the common targets, make those concurrent stores defined behaviour.
+    /// carried force: the gather then reads spill entries only for stamped particles). Every
+    /// store of a step writes the same value, so the result does not depend on which thread
+    /// stores first: relaxed atomics, plain moves on the common targets, make those
+    /// concurrent stores defined behaviour.
     touched: Vec<AtomicU32>,
     stamp: u32,
     /// A listed pair found apart (and unbonded, without shear) stays apart while the drift
