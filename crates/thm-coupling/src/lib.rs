@@ -26,6 +26,8 @@
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod pore_scale;
+
 pub mod verification {
     //! Verification cases of this crate, collected by `cargo xtask verify`.
     use thm_verify::Case;

@@ -126,6 +126,9 @@ pub struct Network {
     pore_link_start: Vec<u32>,
     pore_link: Vec<u32>,
     pore_cell: Vec<u32>,
+    /// For each boundary link, the mesh face it crosses (empty for a hand-made network).
+    #[serde(default)]
+    link_face: Vec<u32>,
 }
 
 /// Flag bit in [`Network::pore_channels`] entries: the pore is the channel's second end.
@@ -305,6 +308,7 @@ impl Network {
         );
         Ok(Self {
             pore_cell: (0..np as u32).collect(),
+            link_face: Vec::new(),
             parts,
             group_face_length,
             pore_channel_start,
@@ -342,6 +346,7 @@ impl Network {
                 pore_cell.push(c as u32);
             }
         }
+        let mut link_face = Vec::new();
         let mut parts = NetworkParts {
             n_pores: pore_cell.len(),
             width: mesh.thickness,
@@ -397,6 +402,7 @@ impl Network {
                     } else {
                         0.0
                     };
+                    link_face.push(f as u32);
                     parts.link_pore.push(p);
                     parts.link_group.push(g as u32);
                     parts.link_length.push(length);
@@ -422,6 +428,7 @@ impl Network {
         }
         let mut net = Self::new(parts)?;
         net.pore_cell = pore_cell;
+        net.link_face = link_face;
         Ok(net)
     }
 
@@ -431,6 +438,12 @@ impl Network {
             .iter()
             .map(|&c| mesh.cell_volume(c as usize))
             .collect()
+    }
+
+    /// For each boundary link, the mesh face it crosses (built by [`Self::from_mesh`]; empty
+    /// for a network made by hand with [`Self::new`]).
+    pub fn link_faces(&self) -> &[u32] {
+        &self.link_face
     }
 
     /// Picks the values of the fluid cells, in pore order, from a per-cell array (e.g. `dV/dt`

@@ -551,6 +551,8 @@ pub struct FlowStepper {
     link: Vec<ChannelFlux>,
     rates: Vec<PoreRate>,
     inflow: Vec<GroupInflow>,
+    channel_mass: Vec<f64>,
+    link_mass: Vec<f64>,
 }
 
 impl FlowStepper {
@@ -562,6 +564,8 @@ impl FlowStepper {
             link: Vec::new(),
             rates: Vec::new(),
             inflow: Vec::new(),
+            channel_mass: Vec::new(),
+            link_mass: Vec::new(),
         }
     }
 
@@ -578,6 +582,20 @@ impl FlowStepper {
     /// The boundary link fluxes of the last sub-step.
     pub fn link_fluxes(&self) -> &[ChannelFlux] {
         &self.link
+    }
+
+    /// Mass (both phases) carried through each channel during the last [`Self::step`] \[kg\],
+    /// positive from the channel's first pore to its second: `Σ_sub h (ṁ_q + ṁ_p)` over the
+    /// sub-steps. Divided by the outer step it is the mean mass rate a heat solver advects
+    /// with, consistent with the mass the pores exchanged.
+    pub fn channel_mass_transfer(&self) -> &[f64] {
+        &self.channel_mass
+    }
+
+    /// Mass (both phases) that entered the domain through each boundary link during the last
+    /// [`Self::step`] \[kg\] (negative: it left).
+    pub fn link_mass_transfer(&self) -> &[f64] {
+        &self.link_mass
     }
 
     fn prepare(
@@ -673,6 +691,10 @@ impl FlowStepper {
             });
         }
         self.prepare(network, state, fluid, dv_dt)?;
+        self.channel_mass.clear();
+        self.channel_mass.resize(network.n_channels(), 0.0);
+        self.link_mass.clear();
+        self.link_mass.resize(network.n_links(), 0.0);
         let ng = network.n_groups();
         let mut report = StepReport {
             substeps: 0,
@@ -718,6 +740,12 @@ impl FlowStepper {
                 let g = network.parts().link_group[k] as usize;
                 report.boundary_liquid_rate[g] += f.liquid;
                 report.boundary_gas_rate[g] += f.gas;
+            }
+            for (m, f) in self.channel_mass.iter_mut().zip(&self.channel) {
+                *m += h * (f.liquid + f.gas);
+            }
+            for (m, f) in self.link_mass.iter_mut().zip(&self.link) {
+                *m += h * (f.liquid + f.gas);
             }
             for g in 0..ng {
                 state.boundary_liquid_inflow[g] += h * report.boundary_liquid_rate[g];

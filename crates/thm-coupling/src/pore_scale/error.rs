@@ -1,0 +1,60 @@
+//! Errors of the coupled schemes.
+
+use thiserror::Error;
+
+/// What went wrong in a coupled step: a parameter out of range, an error of one of the
+/// composed crates (wrapped with the stage it came from), or an unphysical state caught at a
+/// stage boundary (naming the quantity, the place and the step).
+#[derive(Debug, Error)]
+pub enum CouplingError {
+    /// A parameter is out of its allowed range.
+    #[error("parameter `{field}` = {value} is out of range: {range}")]
+    Parameter {
+        /// The parameter's name.
+        field: &'static str,
+        /// The allowed range.
+        range: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// The DEM (contact law, stepper, particle state).
+    #[error("DEM: {0}")]
+    Dem(thm_dem::DemError),
+    /// The mesher, mesh motion or remap.
+    #[error("pore mesh: {0}")]
+    Mesh(thm_vpn_mesh::MeshError),
+    /// The flow solver or the fluid model.
+    #[error("flow: {0}")]
+    Flow(thm_vpn_flow::FlowError),
+    /// The heat solver.
+    #[error("heat: {0}")]
+    Heat(thm_fvm_heat::HeatError),
+    /// An unphysical or non-finite value at a stage boundary.
+    #[error("{stage}: {quantity} = {value} in {place} {index} at coupled step {step} is {why}")]
+    Unphysical {
+        /// The stage that produced it.
+        stage: &'static str,
+        /// The quantity.
+        quantity: &'static str,
+        /// Kind of place (`pore`, `cell`, `sphere`).
+        place: &'static str,
+        /// Its index.
+        index: usize,
+        /// The value.
+        value: f64,
+        /// The coupled step.
+        step: u64,
+        /// What is wrong with it.
+        why: &'static str,
+    },
+    /// The state does not fit the stepper (sizes differ).
+    #[error("state does not match the stepper: {what} has {got} entries, expected {expected}")]
+    StateMismatch {
+        /// The array.
+        what: &'static str,
+        /// Its length.
+        got: usize,
+        /// The expected length.
+        expected: usize,
+    },
+}

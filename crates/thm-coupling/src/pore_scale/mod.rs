@@ -1,0 +1,359 @@
+//! The pore-scale DEM–CFD–heat step of Krzaczek, Nitka & Tejchman (2023), A-Fig. 7.
+//!
+//! One coupled step of length Δt_C runs the stages of [`stages`] in a fixed order over the
+//! caller's [`PoreScaleState`]:
+//!
+//! 1. [`stages::fluid_forces`]: pore pressures and S2S wall shear to sphere forces
+//!    (A-Eqs. 52–54);
+//! 2. [`stages::dem_steps`]: `ceil(Δt_C / Δt_D)` equal DEM steps (`thm-dem`, A-Eqs. 1–7) with
+//!    those forces held;
+//! 3. [`stages::mesh_motion`]: the mesh follows the spheres (`thm-vpn-mesh`), T2T apertures
+//!    on the moved faces (A-Eq. 9);
+//! 4. [`stages::s2s_apertures`]: S2S apertures from the contacts' normal stress (A-Eq. 8);
+//! 5. [`stages::flow_stage`]: the flow over Δt_C (`thm-vpn-flow` with the `thm-eos` closure),
+//!    each pore's dV/dt the change of its cell volume over the step;
+//! 6. [`stages::heat_stage`]: heat over Δt_C (`thm-fvm-heat`), advected by the step's mean
+//!    channel mass rates, fluid capacities from the flow's phase masses, Nusselt interface
+//!    (A-Eqs. 43–45); then the pores are closed again at their new temperatures;
+//! 7. [`stages::sphere_radii`]: sphere temperatures to radii (A-Eq. 55);
+//! 8. [`stages::remesh`]: remesh on trigger and conservative remap of liquid and gas mass and
+//!    of fluid and solid energy.
+//!
+//! A fixed skeleton ([`Skeleton::Fixed`], A-Sect. 6 case b and the fluid–heat cases of
+//! A-Sects. 4–5) runs stages 1, 5 and 6 of the same step: no DEM step, no motion, no change of
+//! radius, no remesh.
+//!
+//! ## Time-step rule
+//!
+//! The caller chooses Δt_C (a scenario's `time.step`). Inside it:
+//!
+//! - the DEM takes `n = ceil(Δt_C / Δt_D)` steps of `Δt_C / n ≤ Δt_D` (Δt_D from the
+//!   parameters, below [`thm_dem::critical_time_step`]);
+//! - the flow sub-cycles under its own stability and positivity limits (`thm-vpn-flow`: the
+//!   Gershgorin bound of the linearised pressure equation and at most half of a phase's mass
+//!   per sub-step);
+//! - the heat either sub-cycles under its explicit limit ([`HeatScheme::Explicit`]) or takes
+//!   one backward-Euler conduction step ([`HeatScheme::Implicit`]; no advection).
+//!
+//! The fluid forces are held over the DEM steps of one coupled step and the flow and heat
+//! see the skeleton at its end, so Δt_C is the coupling lag; the flow's and heat's own limits
+//! never depend on the caller's choice.
+//!
+//! ## Conservation
+//!
+//! The phase masses change only through channel and boundary fluxes (each added to one pore
+//! and taken from the other) and the remap (which conserves totals to round-off), so with no
+//! boundary flux the liquid and gas masses stay constant to round-off through every step and
+//! remesh. The thermal energy `Σ C (T − T_ref)` (fluid capacities from the phase masses) is
+//! changed by the heat stage only through boundary heat and advected enthalpy: the capacity
+//! change of a fluid cell by the mass the flow moved is folded into its temperature before the
+//! heat step (see [`stages::heat_stage`]).
+
+mod error;
+mod params;
+pub mod stages;
+mod state;
+
+pub use error::CouplingError;
+pub use params::{FlowBoundary, HeatScheme, PoreScaleConfig, PoreScaleParams, Skeleton};
+pub use state::{
+    InitialFluid, PoreScaleState, cell_capacities, circles_of, contact_normal_stress, contacts_of,
+};
+
+use thm_dem::{CohesiveFrictional, Stepper, StepperParams};
+use thm_fvm_heat::{FlowInput, HeatGeometry, HeatModel, HeatStepper};
+use thm_vpn_flow::{FlowStepper, Network, PoreFluid};
+use thm_vpn_mesh::{MeshMotion, RemeshReason};
+
+use stages::{FlowTransfer, HeatParts};
+
+/// What one coupled step did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepReport {
+    /// DEM steps taken (0 with a fixed skeleton).
+    pub dem_steps: u64,
+    /// Flow sub-steps.
+    pub flow_substeps: u32,
+    /// Heat sub-steps (1 for an implicit step).
+    pub heat_substeps: usize,
+    /// Largest channel Reynolds number.
+    pub max_reynolds: f64,
+    /// Why the mesh was rebuilt at the end of the step, if it was.
+    pub remeshed: Option<RemeshReason>,
+}
+
+/// The coupled stepper: the composed solvers' scratch and what is derived from the state's
+/// mesh (the flow network, the heat model and geometry). It holds no evolving state: built
+/// afresh from a restored [`PoreScaleState`], it continues a run bit for bit.
+#[derive(Debug)]
+pub struct PoreScaleStepper<F> {
+    config: PoreScaleConfig,
+    fluid: F,
+    dem: Option<(f64, Stepper<CohesiveFrictional>)>,
+    network: Network,
+    heat_model: HeatModel,
+    heat_geometry: HeatGeometry,
+    flow: FlowStepper,
+    heat: HeatStepper,
+    motion: MeshMotion,
+    force: Vec<[f64; 2]>,
+    dv_dt: Vec<f64>,
+    input: FlowInput,
+    old_capacity: Vec<f64>,
+    new_capacity: Vec<f64>,
+}
+
+impl<F: PoreFluid> PoreScaleStepper<F> {
+    /// Builds the stepper for `state` (its mesh sets the network and the heat geometry).
+    pub fn new(
+        config: PoreScaleConfig,
+        fluid: F,
+        state: &PoreScaleState,
+    ) -> Result<Self, CouplingError> {
+        let (network, heat_model, heat_geometry) = derived(&config, state)?;
+        let input = FlowInput::liquid_at_rest(&state.mesh.mesh, 1.0, 1.0);
+        Ok(Self {
+            flow: FlowStepper::new(config.flow.clone()),
+            config,
+            fluid,
+            dem: None,
+            network,
+            heat_model,
+            heat_geometry,
+            heat: HeatStepper::new(),
+            motion: MeshMotion::new(),
+            force: Vec::new(),
+            dv_dt: Vec::new(),
+            input,
+            old_capacity: Vec::new(),
+            new_capacity: Vec::new(),
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &PoreScaleConfig {
+        &self.config
+    }
+
+    /// The fluid model.
+    pub fn fluid(&self) -> &F {
+        &self.fluid
+    }
+
+    /// The flow network of the current mesh.
+    pub fn network(&self) -> &Network {
+        &self.network
+    }
+
+    /// The heat solver's input of the last step (fractions, densities, mean mass rates).
+    pub fn heat_input(&self) -> &FlowInput {
+        &self.input
+    }
+
+    /// The fluid force on each sphere applied in the last step \[N\] (x, y).
+    pub fn fluid_force(&self) -> &[[f64; 2]] {
+        &self.force
+    }
+
+    /// Advances `state` by one coupled step of `dt` \[s\] (see the module docs for the stages).
+    /// On error the state is left where the failing stage stopped: restore it from the last
+    /// checkpoint.
+    pub fn step(
+        &mut self,
+        state: &mut PoreScaleState,
+        dt: f64,
+    ) -> Result<StepReport, CouplingError> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(CouplingError::Parameter {
+                field: "dt",
+                range: "> 0 s",
+                value: dt,
+            });
+        }
+        self.check(state)?;
+        let free = self.config.params.skeleton == params::Skeleton::Free;
+        self.old_capacity = cell_capacities(state, &self.config.params.heat);
+        stages::fluid_forces(
+            &self.network,
+            &state.flow,
+            &self.config.flow,
+            &state.mesh_contacts,
+            &mut self.force,
+            &mut state.dem,
+        )?;
+        let mut dem_steps = 0;
+        if free {
+            let (h, n) = dem_substeps(self.config.params.dem.time_step, dt);
+            let dem = self.dem_stepper(h)?;
+            stages::dem_steps(dem, h, n, &mut state.dem, &mut state.rotation)?;
+            dem_steps = n;
+            stages::mesh_motion(
+                &mut self.motion,
+                &mut state.mesh,
+                &state.dem,
+                &state.rotation,
+                &state.radius_rate,
+            )?;
+            stages::s2s_apertures(
+                &mut state.mesh,
+                &state.mesh_contacts,
+                &state.dem,
+                &self.config.mesh.params().s2s,
+            )?;
+            self.network = Network::from_mesh(
+                &state.mesh.mesh,
+                &self.config.flow_boundaries(),
+                self.config.params.boundary_reduction_factor,
+            )
+            .map_err(CouplingError::Flow)?;
+            self.heat_geometry
+                .update_positions(&self.heat_model, &state.mesh.mesh)
+                .map_err(CouplingError::Heat)?;
+        }
+        let FlowTransfer {
+            substeps: flow_substeps,
+            max_reynolds,
+        } = stages::flow_stage(
+            &mut self.flow,
+            &self.network,
+            &self.fluid,
+            &state.mesh,
+            free,
+            &mut state.flow,
+            &mut self.dv_dt,
+            &mut self.input,
+            dt,
+        )?;
+        self.new_capacity = cell_capacities(state, &self.config.params.heat);
+        let heat_substeps = stages::heat_stage(
+            &mut self.heat,
+            HeatParts {
+                params: &self.config.params.heat,
+                model: &self.heat_model,
+                geometry: &self.heat_geometry,
+                scheme: self.config.params.heat_scheme,
+            },
+            &state.mesh,
+            &self.network,
+            (&self.old_capacity, &self.new_capacity),
+            &self.input,
+            &self.fluid,
+            &mut state.flow,
+            &mut state.heat,
+            dt,
+        )?;
+        let mut remeshed = None;
+        if free {
+            stages::sphere_radii(
+                &state.mesh,
+                &state.heat,
+                self.config.params.thermal_expansion,
+                &mut state.dem,
+                &mut state.radius_rate,
+                dt,
+            )?;
+            if let Some(r) = stages::remesh(
+                &self.config.mesh,
+                &self.config.remesh,
+                &self.config.flow_boundaries(),
+                self.config.params.boundary_reduction_factor,
+                &self.config.params.heat,
+                &self.fluid,
+                &self.network,
+                state,
+            )? {
+                remeshed = Some(r.reason);
+                state.mesh = r.mesh;
+                state.mesh_contacts = r.mesh_contacts;
+                state.flow = r.flow;
+                state.heat = r.heat;
+                state.rotation.fill(0.0);
+                state.remeshes += 1;
+                // The sphere temperatures of the new cells become T_avg^n, so the remap itself
+                // changes no radius.
+                let t = stages::sphere_temperatures(&state.mesh, &state.heat, &state.dem)?;
+                state.dem.particles.temperature = t;
+                let (network, model, geometry) = derived(&self.config, state)?;
+                self.network = network;
+                self.heat_model = model;
+                self.heat_geometry = geometry;
+            }
+        }
+        state.step += 1;
+        state.time += dt;
+        Ok(StepReport {
+            dem_steps,
+            flow_substeps,
+            heat_substeps,
+            max_reynolds,
+            remeshed,
+        })
+    }
+
+    /// The DEM stepper for sub-steps of `h` (rebuilt when `h` changes).
+    fn dem_stepper(&mut self, h: f64) -> Result<&mut Stepper<CohesiveFrictional>, CouplingError> {
+        if self.dem.as_ref().is_none_or(|(old, _)| *old != h) {
+            let params = StepperParams {
+                time_step: h,
+                ..self.config.params.dem
+            };
+            let config = params.validate().map_err(CouplingError::Dem)?;
+            self.dem = Some((h, Stepper::new(self.config.law.clone(), config)));
+        }
+        match self.dem.as_mut() {
+            Some((_, s)) => Ok(s),
+            None => Err(CouplingError::Parameter {
+                field: "dem.time_step",
+                range: "> 0 s",
+                value: h,
+            }),
+        }
+    }
+
+    fn check(&self, state: &PoreScaleState) -> Result<(), CouplingError> {
+        let n = state.dem.particles.len();
+        for (what, got, expected) in [
+            ("rotation", state.rotation.len(), n),
+            ("radius_rate", state.radius_rate.len(), n),
+            ("mesh circles", state.mesh.circles.len(), n),
+            ("flow pores", state.flow.n_pores(), self.network.n_pores()),
+            (
+                "heat temperatures",
+                state.heat.temperature.len(),
+                state.mesh.mesh.n_cells(),
+            ),
+        ] {
+            if got != expected {
+                return Err(CouplingError::StateMismatch {
+                    what,
+                    got,
+                    expected,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `(h, n)`: `n = ceil(dt / dt_dem)` DEM steps of `h = dt / n`.
+pub fn dem_substeps(dt_dem: f64, dt: f64) -> (f64, u64) {
+    let n = ((dt / dt_dem) * (1.0 - 1e-12)).ceil().max(1.0) as u64;
+    (dt / n as f64, n)
+}
+
+/// The parts of the stepper that follow from the state's mesh.
+fn derived(
+    config: &PoreScaleConfig,
+    state: &PoreScaleState,
+) -> Result<(Network, HeatModel, HeatGeometry), CouplingError> {
+    let mesh = &state.mesh.mesh;
+    let network = Network::from_mesh(
+        mesh,
+        &config.flow_boundaries(),
+        config.params.boundary_reduction_factor,
+    )
+    .map_err(CouplingError::Flow)?;
+    let model = HeatModel::new(&config.params.heat, mesh).map_err(CouplingError::Heat)?;
+    let geometry = HeatGeometry::new(&model, mesh).map_err(CouplingError::Heat)?;
+    Ok((network, model, geometry))
+}

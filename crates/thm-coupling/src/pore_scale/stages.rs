@@ -1,0 +1,488 @@
+//! The stages of one coupled step (A-Fig. 7), each a function over caller-owned data that can
+//! be tested alone. [`super::PoreScaleStepper::step`] runs them in this order.
+
+use thm_dem::{CohesiveFrictional, DemState, Stepper, Vec3};
+use thm_fvm_heat::{
+    FlowInput, HeatGeometry, HeatModel, HeatParams, HeatState, HeatStepper, sphere_mean_temperatures,
+};
+use thm_vpn_flow::{FlowConfig, FlowState, FlowStepper, Network, PoreFluid, add_sphere_forces};
+use thm_vpn_mesh::{
+    CellFilter, CircleMotion, Contact, MeshMotion, MeshSettings, PackingMesh, RemapOperator,
+    RemeshCriteria, RemeshReason, S2sApertureParams, mesh_packing, remesh_needed,
+};
+
+use super::error::CouplingError;
+use super::params::HeatScheme;
+use super::state::{circles_of, contact_normal_stress, contacts_of, fluid_capacity};
+
+
+/// Stage 1 (A-Eqs. 52–54): the fluid forces on the spheres from the pore pressures and the
+/// S2S wall shear, written into `dem.particles.external_force` (x, y; z = 0). `force` is
+/// scratch (one entry per sphere).
+pub fn fluid_forces(
+    network: &Network,
+    flow: &FlowState,
+    config: &FlowConfig,
+    mesh_contacts: &[Contact],
+    force: &mut Vec<[f64; 2]>,
+    dem: &mut DemState,
+) -> Result<(), CouplingError> {
+    let n = dem.particles.len();
+    force.clear();
+    force.resize(n, [0.0; 2]);
+    let spheres: Vec<[u32; 2]> = mesh_contacts.iter().map(|c| c.circles).collect();
+    add_sphere_forces(network, flow, config, &spheres, force).map_err(CouplingError::Flow)?;
+    for (i, (f, out)) in force
+        .iter()
+        .zip(&mut dem.particles.external_force)
+        .enumerate()
+    {
+        if !(f[0].is_finite() && f[1].is_finite()) {
+            return Err(CouplingError::Unphysical {
+                stage: "fluid forces",
+                quantity: "fluid force",
+                place: "sphere",
+                index: i,
+                value: if f[0].is_finite() { f[1] } else { f[0] },
+                step: flow.step,
+                why: "not finite",
+            });
+        }
+        *out = Vec3::new(f[0], f[1], 0.0);
+    }
+    Ok(())
+}
+
+/// Stage 2: `n` DEM steps (the stepper's Δt_D each), and the turn of every sphere about z
+/// accumulated into `rotation` for the mesh motion.
+pub fn dem_steps(
+    stepper: &mut Stepper<CohesiveFrictional>,
+    dt_dem: f64,
+    n: u64,
+    dem: &mut DemState,
+    rotation: &mut [f64],
+) -> Result<(), CouplingError> {
+    for _ in 0..n {
+        stepper.step(dem).map_err(CouplingError::Dem)?;
+        for (a, w) in rotation.iter_mut().zip(&dem.particles.angular_velocity) {
+            *a += w.z * dt_dem;
+        }
+    }
+    Ok(())
+}
+
+/// Stage 3: moves the mesh with the spheres (vertices anchored to their circles, exact
+/// geometry of every cell, face and channel; T2T apertures A-Eq. 9 on the moved faces).
+pub fn mesh_motion(
+    motion: &mut MeshMotion,
+    mesh: &mut PackingMesh,
+    dem: &DemState,
+    rotation: &[f64],
+    radius_rate: &[f64],
+) -> Result<(), CouplingError> {
+    let p = &dem.particles;
+    let centre: Vec<[f64; 2]> = p.position.iter().map(|x| [x.x, x.y]).collect();
+    let velocity: Vec<[f64; 2]> = p.velocity.iter().map(|v| [v.x, v.y]).collect();
+    let omega: Vec<f64> = p.angular_velocity.iter().map(|w| w.z).collect();
+    let m = CircleMotion {
+        centre: &centre,
+        radius: &p.radius,
+        rotation,
+        velocity: &velocity,
+        angular_velocity: &omega,
+        radius_rate,
+    };
+    motion.update(mesh, &m).map_err(CouplingError::Mesh)
+}
+
+/// Stage 4: S2S apertures (A-Eq. 8) from the current normal stress of the DEM contact of every
+/// mesh contact; the T2T apertures (A-Eq. 9) were set by the mesh motion.
+pub fn s2s_apertures(
+    mesh: &mut PackingMesh,
+    mesh_contacts: &[Contact],
+    dem: &DemState,
+    law: &S2sApertureParams,
+) -> Result<(), CouplingError> {
+    let stress: Vec<f64> = mesh_contacts
+        .iter()
+        .map(|c| contact_normal_stress(dem, c.circles))
+        .collect();
+    mesh.update_s2s_apertures(&stress, law)
+        .map_err(CouplingError::Mesh)
+}
+
+/// What the flow stage hands on: the mean mass rates of the step for the heat solver.
+#[derive(Debug, Clone, Default)]
+pub struct FlowTransfer {
+    /// Sub-steps the flow took.
+    pub substeps: u32,
+    /// Largest channel Reynolds number of the step.
+    pub max_reynolds: f64,
+}
+
+/// Stage 5: the flow over Δt_C (A-Eqs. 10–15, 24–29). Each pore's dV/dt is the change of its
+/// cell volume since the flow state last saw it, divided by `dt`, so the flow volumes track
+/// the mesh exactly; a fixed skeleton passes rigid pores. Fills `input` (fractions,
+/// densities and the step's mean mass rates through channels and boundary faces) for the
+/// heat stage.
+#[allow(clippy::too_many_arguments)]
+pub fn flow_stage(
+    stepper: &mut FlowStepper,
+    network: &Network,
+    fluid: &impl PoreFluid,
+    mesh: &PackingMesh,
+    moving: bool,
+    flow: &mut FlowState,
+    dv_dt: &mut Vec<f64>,
+    input: &mut FlowInput,
+    dt: f64,
+) -> Result<FlowTransfer, CouplingError> {
+    dv_dt.clear();
+    if moving {
+        dv_dt.extend(
+            network
+                .pore_cell()
+                .iter()
+                .zip(&flow.volume)
+                .map(|(&c, &v)| (mesh.mesh.cell_volume(c as usize) - v) / dt),
+        );
+    }
+    let report = stepper
+        .step(network, flow, fluid, dv_dt, dt)
+        .map_err(CouplingError::Flow)?;
+    check_flow(flow)?;
+    let m = &mesh.mesh;
+    let nc = m.n_cells();
+    input.liquid_fraction.resize(nc, 0.0);
+    input.liquid_density.resize(nc, 0.0);
+    input.gas_density.resize(nc, 0.0);
+    input.channel_mass_flux.clear();
+    input
+        .channel_mass_flux
+        .extend(stepper.channel_mass_transfer().iter().map(|m| m / dt));
+    input.boundary_mass_flux.clear();
+    input.boundary_mass_flux.resize(m.n_faces(), 0.0);
+    for (&f, &mass) in network
+        .link_faces()
+        .iter()
+        .zip(stepper.link_mass_transfer())
+    {
+        // Links carry mass into the domain; the heat solver's face flux is outward.
+        input.boundary_mass_flux[f as usize] = -mass / dt;
+    }
+    for (p, &c) in network.pore_cell().iter().enumerate() {
+        let c = c as usize;
+        input.liquid_fraction[c] = flow.liquid_fraction[p];
+        input.liquid_density[c] = flow.liquid_density[p];
+        input.gas_density[c] = flow.gas_density[p];
+    }
+    Ok(FlowTransfer {
+        substeps: report.substeps,
+        max_reynolds: report.max_reynolds,
+    })
+}
+
+/// The checks at the flow stage's boundary: finite positive pressure, α_q ∈ [0, 1], finite
+/// non-negative masses.
+pub fn check_flow(flow: &FlowState) -> Result<(), CouplingError> {
+    let bad = |quantity, index, value, why| CouplingError::Unphysical {
+        stage: "flow",
+        quantity,
+        place: "pore",
+        index,
+        value,
+        step: flow.step,
+        why,
+    };
+    for p in 0..flow.n_pores() {
+        let pr = flow.pressure[p];
+        if !(pr.is_finite() && pr > 0.0) {
+            return Err(bad("pressure", p, pr, "not a finite positive pressure"));
+        }
+        let a = flow.liquid_fraction[p];
+        if !(0.0..=1.0).contains(&a) {
+            return Err(bad("liquid fraction", p, a, "outside [0, 1]"));
+        }
+        for (q, m) in [
+            ("liquid mass", flow.liquid_mass[p]),
+            ("gas mass", flow.gas_mass[p]),
+        ] {
+            if !(m.is_finite() && m >= 0.0) {
+                return Err(bad(q, p, m, "negative or not finite"));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The solver parts of the heat stage.
+#[derive(Debug, Clone, Copy)]
+pub struct HeatParts<'a> {
+    /// Parameters (specific heats for the capacities, reference temperature).
+    pub params: &'a HeatParams,
+    /// The validated model.
+    pub model: &'a HeatModel,
+    /// Mesh-derived coefficients for the mesh as it is now.
+    pub geometry: &'a HeatGeometry,
+    /// How heat is advanced.
+    pub scheme: HeatScheme,
+}
+
+/// Stage 6: heat over Δt_C (A-Eqs. 30–51) with the flow's fractions, densities and mean mass
+/// rates. A cell's capacity changed over the step: a fluid cell's with the mass the flow
+/// moved, a solid cell's with its volume as the sphere moved and expanded. To keep the energy
+/// `Σ C (T − T_ref)` of A-Eqs. 39 and 50 exact (`ρ^{n+1} E^{n+1} V^{n+1} − ρ^n E^n V^n`), the
+/// temperature is first re-expressed at the new capacity, `T ← T_ref + (C^n/C^{n+1})(T − T_ref)`,
+/// so that the advective heat of the step, `ṁ c_p (T_f − T_ref)`, then carries the entering
+/// enthalpy. `capacity` is `(C^n, C^{n+1})` per cell ([`super::cell_capacities`]).
+/// Afterwards the fluid temperatures go to the pores and the flow state is closed again at
+/// them (thermal pressurisation, A-Eq. 29). Returns the explicit sub-steps taken.
+#[allow(clippy::too_many_arguments)]
+pub fn heat_stage(
+    stepper: &mut HeatStepper,
+    parts: HeatParts<'_>,
+    mesh: &PackingMesh,
+    network: &Network,
+    capacity: (&[f64], &[f64]),
+    input: &FlowInput,
+    fluid: &impl PoreFluid,
+    flow: &mut FlowState,
+    heat: &mut HeatState,
+    dt: f64,
+) -> Result<usize, CouplingError> {
+    let t_ref = parts.params.reference_temperature;
+    let (old, new) = capacity;
+    if old.len() != heat.temperature.len() || new.len() != heat.temperature.len() {
+        return Err(CouplingError::StateMismatch {
+            what: "cell capacities",
+            got: old.len().min(new.len()),
+            expected: heat.temperature.len(),
+        });
+    }
+    for ((t, &c_old), &c_new) in heat.temperature.iter_mut().zip(old).zip(new) {
+        if c_new > 0.0 && c_old != c_new {
+            *t = t_ref + c_old / c_new * (*t - t_ref);
+        }
+    }
+    let m = &mesh.mesh;
+    let substeps = match parts.scheme {
+        HeatScheme::Explicit => {
+            stepper
+                .step(parts.model, parts.geometry, m, input, heat, dt)
+                .map_err(CouplingError::Heat)?
+                .substeps
+        }
+        HeatScheme::Implicit => {
+            stepper
+                .implicit_step(parts.model, parts.geometry, m, input, heat, dt)
+                .map_err(CouplingError::Heat)?;
+            1
+        }
+    };
+    for (c, &t) in heat.temperature.iter().enumerate() {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(CouplingError::Unphysical {
+                stage: "heat",
+                quantity: "temperature",
+                place: "cell",
+                index: c,
+                value: t,
+                step: flow.step,
+                why: "not a finite positive temperature",
+            });
+        }
+    }
+    for (p, &c) in network.pore_cell().iter().enumerate() {
+        flow.temperature[p] = heat.temperature[c as usize];
+    }
+    flow.close(fluid).map_err(CouplingError::Flow)?;
+    check_flow(flow)?;
+    Ok(substeps)
+}
+
+/// Stage 7 (A-Eq. 55): the volume-average temperature of each sphere's solid cells changes
+/// its radius, `r^{n+1} = r^n (1 + α_exp (T_avg^{n+1} − T_avg^n))`; `radius_rate` gets
+/// `Δr/dt`. A sphere without solid cells keeps its radius.
+pub fn sphere_radii(
+    mesh: &PackingMesh,
+    heat: &HeatState,
+    expansion: f64,
+    dem: &mut DemState,
+    radius_rate: &mut [f64],
+    dt: f64,
+) -> Result<(), CouplingError> {
+    let t_new = sphere_temperatures(mesh, heat, dem)?;
+    let old = dem.particles.radius.clone();
+    dem.particles
+        .expand_incremental(expansion, &t_new)
+        .map_err(CouplingError::Dem)?;
+    for ((rate, r), r0) in radius_rate.iter_mut().zip(&dem.particles.radius).zip(&old) {
+        *rate = (r - r0) / dt;
+    }
+    Ok(())
+}
+
+/// The volume-average temperature of every sphere's solid cells (its current temperature
+/// where it has none).
+pub fn sphere_temperatures(
+    mesh: &PackingMesh,
+    heat: &HeatState,
+    dem: &DemState,
+) -> Result<Vec<f64>, CouplingError> {
+    let mut mean = Vec::new();
+    sphere_mean_temperatures(&mesh.mesh, &heat.temperature, &mut mean)
+        .map_err(CouplingError::Heat)?;
+    Ok(dem
+        .particles
+        .temperature
+        .iter()
+        .enumerate()
+        .map(|(i, &t)| mean.get(i).copied().flatten().unwrap_or(t))
+        .collect())
+}
+
+/// The result of a remesh: the new mesh and its contacts, the remapped fluid and heat states.
+#[derive(Debug)]
+pub struct Remeshed {
+    /// Why the mesh was rebuilt.
+    pub reason: RemeshReason,
+    /// The new mesh.
+    pub mesh: PackingMesh,
+    /// Its contacts.
+    pub mesh_contacts: Vec<Contact>,
+    /// The network of the new mesh.
+    pub network: Network,
+    /// The remapped flow state (closed).
+    pub flow: FlowState,
+    /// The remapped temperatures.
+    pub heat: HeatState,
+}
+
+/// Stage 8 (A-Sect. 2.4): when the packing has changed enough since the mesh was built
+/// ([`remesh_needed`]), a new mesh of the spheres as they are, and the conservative remap of
+/// the liquid and gas masses (to fluid cells) and of the thermal energy `C (T − T_ref)` (fluid
+/// energy to fluid cells, solid energy to the same sphere's solid cells); the new temperatures
+/// are energy over the new capacities, and pressures and fractions follow from the remapped
+/// masses through the closure (A-Eq. 29). `None` when no remesh is needed.
+#[allow(clippy::too_many_arguments)]
+pub fn remesh(
+    settings: &MeshSettings,
+    criteria: &RemeshCriteria,
+    boundaries: &[(thm_vpn_mesh::BoundarySide, thm_vpn_flow::BoundaryCondition)],
+    boundary_reduction_factor: f64,
+    heat_params: &HeatParams,
+    fluid: &impl PoreFluid,
+    network: &Network,
+    state: &super::PoreScaleState,
+) -> Result<Option<Remeshed>, CouplingError> {
+    let dem = &state.dem;
+    let p = &dem.particles;
+    let centre: Vec<[f64; 2]> = p.position.iter().map(|x| [x.x, x.y]).collect();
+    let velocity: Vec<[f64; 2]> = p.velocity.iter().map(|v| [v.x, v.y]).collect();
+    let omega: Vec<f64> = p.angular_velocity.iter().map(|w| w.z).collect();
+    let motion = CircleMotion {
+        centre: &centre,
+        radius: &p.radius,
+        rotation: &state.rotation,
+        velocity: &velocity,
+        angular_velocity: &omega,
+        radius_rate: &state.radius_rate,
+    };
+    let circles = circles_of(dem);
+    let contacts = contacts_of(dem, &circles);
+    let segments = settings.params().segments_per_circle;
+    let Some(reason) = remesh_needed(&state.mesh, &motion, &contacts, segments, criteria)
+        .map_err(CouplingError::Mesh)?
+    else {
+        return Ok(None);
+    };
+    let new = mesh_packing(&circles, &contacts, settings).map_err(CouplingError::Mesh)?;
+    let old_mesh = &state.mesh.mesh;
+    let op = RemapOperator::new(old_mesh, &new.mesh).map_err(CouplingError::Mesh)?;
+    let (no, nn) = (old_mesh.n_cells(), new.mesh.n_cells());
+    let t_ref = heat_params.reference_temperature;
+    let solid_rc = heat_params.solid.density * heat_params.solid.specific_heat;
+    // Old extensive fields per cell.
+    let mut mq = vec![0.0; no];
+    let mut mp = vec![0.0; no];
+    let mut e_fluid = vec![0.0; no];
+    let mut e_solid = vec![0.0; no];
+    for (q, &c) in network.pore_cell().iter().enumerate() {
+        let c = c as usize;
+        mq[c] = state.flow.liquid_mass[q];
+        mp[c] = state.flow.gas_mass[q];
+        e_fluid[c] = fluid_capacity(mq[c], mp[c], heat_params) * (state.heat.temperature[c] - t_ref);
+    }
+    for c in 0..no {
+        if !old_mesh.cell_kind[c].is_fluid() {
+            e_solid[c] = solid_rc * old_mesh.cell_volume(c) * (state.heat.temperature[c] - t_ref);
+        }
+    }
+    let remap = |filter, old: &[f64]| -> Result<Vec<f64>, CouplingError> {
+        let mut out = vec![0.0; nn];
+        op.apply(filter, old, &mut out)
+            .map_err(CouplingError::Mesh)?;
+        Ok(out)
+    };
+    let (nq, np_, nef, nes) = (
+        remap(CellFilter::Fluid, &mq)?,
+        remap(CellFilter::Fluid, &mp)?,
+        remap(CellFilter::Fluid, &e_fluid)?,
+        remap(CellFilter::SameOwner, &e_solid)?,
+    );
+    let new_network = Network::from_mesh(&new.mesh, boundaries, boundary_reduction_factor)
+        .map_err(CouplingError::Flow)?;
+    let mut temperature = vec![t_ref; nn];
+    for c in 0..nn {
+        if !new.mesh.cell_kind[c].is_fluid() {
+            let cap = solid_rc * new.mesh.cell_volume(c);
+            temperature[c] = t_ref + nes[c] / cap;
+        }
+    }
+    let pores = new_network.n_pores();
+    let (mut lq, mut lp, mut tp) = (
+        Vec::with_capacity(pores),
+        Vec::with_capacity(pores),
+        Vec::with_capacity(pores),
+    );
+    for (q, &c) in new_network.pore_cell().iter().enumerate() {
+        let c = c as usize;
+        let cap = fluid_capacity(nq[c], np_[c], heat_params);
+        if !(cap > 0.0) {
+            return Err(CouplingError::Unphysical {
+                stage: "remesh",
+                quantity: "fluid mass",
+                place: "pore",
+                index: q,
+                value: nq[c] + np_[c],
+                step: state.step,
+                why: "zero after the remap (a new pore that overlaps no old pore)",
+            });
+        }
+        temperature[c] = t_ref + nef[c] / cap;
+        lq.push(nq[c]);
+        lp.push(np_[c]);
+        tp.push(temperature[c]);
+    }
+    let volume = new_network.pore_volumes(&new.mesh);
+    let mut flow = FlowState::from_masses(&new_network, volume, tp, lq, lp, fluid)
+        .map_err(CouplingError::Flow)?;
+    flow.step = state.flow.step;
+    flow.time = state.flow.time;
+    flow.boundary_liquid_inflow = state.flow.boundary_liquid_inflow.clone();
+    flow.boundary_gas_inflow = state.flow.boundary_gas_inflow.clone();
+    check_flow(&flow)?;
+    let heat = HeatState {
+        time: state.heat.time,
+        steps: state.heat.steps,
+        temperature,
+    };
+    Ok(Some(Remeshed {
+        reason,
+        mesh: new,
+        mesh_contacts: contacts,
+        network: new_network,
+        flow,
+        heat,
+    }))
+}

@@ -1,0 +1,274 @@
+//! The pore-scale coupled step (A-Fig. 7): conservation, determinism, restart, stages and bad
+//! input.
+
+mod common;
+
+use common::*;
+use thm_coupling::pore_scale::{
+    CouplingError, InitialFluid, PoreScaleState, Skeleton, dem_substeps, stages,
+};
+use thm_vpn_mesh::{NONE, RemeshCriteriaParams};
+
+/// Steps a fresh run; returns the state and the number of remeshes.
+fn run(skeleton: Skeleton, remesh: RemeshCriteriaParams, steps: usize, dt: f64) -> (PoreScaleState, u64) {
+    let config = params(skeleton, remesh).validate().expect("params");
+    let mut s = state(&config);
+    let mut st = stepper(&config, &s);
+    let mut remeshes = 0;
+    for _ in 0..steps {
+        let r = st.step(&mut s, dt).expect("step");
+        remeshes += u64::from(r.remeshed.is_some());
+    }
+    (s, remeshes)
+}
+
+/// Every evolving number of the state, as bits.
+fn bits(s: &PoreScaleState) -> Vec<u64> {
+    let p = &s.dem.particles;
+    let mut out: Vec<u64> = Vec::new();
+    for x in p.position.iter().chain(&p.velocity).chain(&p.angular_velocity) {
+        out.extend([x.x.to_bits(), x.y.to_bits(), x.z.to_bits()]);
+    }
+    for v in [
+        &p.radius,
+        &p.temperature,
+        &s.rotation,
+        &s.radius_rate,
+        &s.flow.liquid_mass,
+        &s.flow.gas_mass,
+        &s.flow.pressure,
+        &s.flow.liquid_fraction,
+        &s.flow.volume,
+        &s.heat.temperature,
+        &s.mesh.mesh.cell_area,
+        &s.mesh.mesh.channels.aperture,
+    ] {
+        out.extend(v.iter().map(|x| x.to_bits()));
+    }
+    for h in &s.dem.contacts.history {
+        out.extend([h.shear_force.x.to_bits(), h.shear_force.y.to_bits()]);
+    }
+    out.push(s.remeshes);
+    out
+}
+
+#[test]
+fn closed_moving_packing_keeps_phase_masses_and_energy_through_remeshes() {
+    // Free spheres expanding and contracting with a 60 K gradient, closed and adiabatic, the
+    // mesh rebuilt on every small change: liquid and gas mass and Σ C (T − T_ref) stay.
+    let config = params(Skeleton::Free, eager_remesh()).validate().expect("params");
+    let heat = config.params().heat.clone();
+    let mut s = state(&config);
+    let mut st = stepper(&config, &s);
+    let (mq0, mp0, e0) = (s.liquid_mass(), s.gas_mass(), s.thermal_energy(&heat));
+    let mut remeshes = 0;
+    let mut moved = 0.0f64;
+    for _ in 0..20 {
+        let r = st.step(&mut s, 1e-5).expect("step");
+        remeshes += u64::from(r.remeshed.is_some());
+        assert!(r.dem_steps == 50);
+        let rel = |a: f64, b: f64| (a / b - 1.0).abs();
+        assert!(rel(s.liquid_mass(), mq0) < 1e-12, "liquid {}", rel(s.liquid_mass(), mq0));
+        assert!(rel(s.gas_mass(), mp0) < 1e-12, "gas {}", rel(s.gas_mass(), mp0));
+        let de = (s.thermal_energy(&heat) - e0).abs() / e0.abs();
+        assert!(de < 1e-12, "energy {de}");
+        moved = moved.max(s.radius_rate.iter().fold(0.0f64, |m, r| m.max(r.abs())));
+    }
+    assert!(remeshes >= 10, "the test must exercise the remap: {remeshes} remeshes");
+    assert!(moved > 0.0, "radii must change (A-Eq. 55)");
+    assert_eq!(s.remeshes, remeshes);
+}
+
+#[test]
+fn fixed_skeleton_moves_fluid_and_heat_but_no_sphere() {
+    let config = params(Skeleton::Fixed, RemeshCriteriaParams::default())
+        .validate()
+        .expect("params");
+    let heat = config.params().heat.clone();
+    let s0 = state(&config);
+    let mut s = s0.clone();
+    let mut st = stepper(&config, &s);
+    for _ in 0..10 {
+        let r = st.step(&mut s, 1e-4).expect("step");
+        assert_eq!(r.dem_steps, 0);
+        assert!(r.remeshed.is_none());
+    }
+    assert_eq!(s.dem.particles.position, s0.dem.particles.position);
+    assert_eq!(s.dem.particles.radius, s0.dem.particles.radius);
+    assert_eq!(s.mesh.mesh.cell_area, s0.mesh.mesh.cell_area);
+    // The gradient drove heat and, through thermal pressurisation, flow.
+    assert!(s.heat.temperature != s0.heat.temperature);
+    assert!(s.flow.liquid_mass != s0.flow.liquid_mass);
+    let rel = |a: f64, b: f64| (a / b - 1.0).abs();
+    assert!(rel(s.liquid_mass(), s0.liquid_mass()) < 1e-12);
+    assert!(rel(s.gas_mass(), s0.gas_mass()) < 1e-12);
+    let de = (s.thermal_energy(&heat) - s0.thermal_energy(&heat)).abs() / s0.thermal_energy(&heat);
+    assert!(de < 1e-12, "energy {de}");
+}
+
+#[test]
+fn one_and_two_threads_give_the_same_bits() {
+    let pool = |n| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .expect("pool")
+    };
+    let one = pool(1).install(|| run(Skeleton::Free, eager_remesh(), 6, 1e-5).0);
+    let two = pool(2).install(|| run(Skeleton::Free, eager_remesh(), 6, 1e-5).0);
+    assert!(one.remeshes > 0);
+    assert_eq!(bits(&one), bits(&two));
+}
+
+#[test]
+fn a_restored_run_continues_bit_for_bit() {
+    let config = params(Skeleton::Free, eager_remesh()).validate().expect("params");
+    let mut s = state(&config);
+    let mut st = stepper(&config, &s);
+    for _ in 0..4 {
+        st.step(&mut s, 1e-5).expect("step");
+    }
+    let saved = serde_json::to_string(&s).expect("save");
+    for _ in 0..4 {
+        st.step(&mut s, 1e-5).expect("step");
+    }
+    let mut r: PoreScaleState = serde_json::from_str(&saved).expect("load");
+    let mut fresh = stepper(&config, &r);
+    for _ in 0..4 {
+        fresh.step(&mut r, 1e-5).expect("step");
+    }
+    assert_eq!(bits(&s), bits(&r));
+}
+
+#[test]
+fn uniform_pore_pressure_pushes_the_spheres_as_the_pore_boundary_says() {
+    // Divergence theorem: with one pressure P in every pore, the pressure forces on the
+    // spheres (A-Eqs. 52-53) sum to −P w Σ n e over the fluid faces on the box, the rest of
+    // the pore space's boundary.
+    let config = params(Skeleton::Fixed, RemeshCriteriaParams::default())
+        .validate()
+        .expect("params");
+    let mut s = state(&config);
+    let st = stepper(&config, &s);
+    let p = 2.5e5;
+    s.flow.pressure.fill(p);
+    let mut force = Vec::new();
+    stages::fluid_forces(
+        st.network(),
+        &s.flow,
+        config.flow(),
+        &s.mesh_contacts.clone(),
+        &mut force,
+        &mut s.dem,
+    )
+    .expect("forces");
+    let m = &s.mesh.mesh;
+    let w = m.thickness;
+    let mut expected = [0.0f64; 2];
+    for f in 0..m.n_faces() {
+        let [c0, c1] = m.face_cells[f];
+        if c1 == NONE && m.cell_kind[c0 as usize].is_fluid() {
+            expected[0] -= p * w * m.face_normal[f][0] * m.face_length[f];
+            expected[1] -= p * w * m.face_normal[f][1] * m.face_length[f];
+        }
+    }
+    let total = force
+        .iter()
+        .fold([0.0f64; 2], |a, f| [a[0] + f[0], a[1] + f[1]]);
+    let scale = p * w * 8.0 * SPACING;
+    for k in 0..2 {
+        assert!(
+            (total[k] - expected[k]).abs() < 1e-12 * scale,
+            "component {k}: {} vs {}",
+            total[k],
+            expected[k]
+        );
+        assert_eq!(
+            s.dem.particles.external_force.iter().map(|f| [f.x, f.y][k]).sum::<f64>(),
+            force.iter().map(|f| f[k]).sum::<f64>()
+        );
+    }
+}
+
+#[test]
+fn dem_substeps_cover_the_coupled_step_within_the_dem_limit() {
+    for (dt_d, dt) in [(2e-7, 1e-5), (3e-7, 1e-5), (1e-5, 1e-5), (7e-6, 1e-6)] {
+        let (h, n) = dem_substeps(dt_d, dt);
+        assert!(h <= dt_d * (1.0 + 1e-12), "{h} > {dt_d}");
+        assert!(((n as f64) * h - dt).abs() <= 1e-15 * dt * n as f64);
+    }
+}
+
+#[test]
+fn sphere_radii_follow_the_mean_solid_temperature() {
+    // A-Eq. 55 on the stage alone: a uniform rise ΔT gives r (1 + α ΔT) and dr/dt = r α ΔT / dt.
+    let config = params(Skeleton::Free, RemeshCriteriaParams::default())
+        .validate()
+        .expect("params");
+    let mut s = state(&config);
+    let r0 = s.dem.particles.radius.clone();
+    let t0 = s.dem.particles.temperature.clone();
+    let dt = 0.5;
+    for t in &mut s.heat.temperature {
+        *t += 10.0;
+    }
+    stages::sphere_radii(&s.mesh, &s.heat, 1e-3, &mut s.dem, &mut s.radius_rate, dt).expect("radii");
+    for i in 0..r0.len() {
+        let dtemp = s.dem.particles.temperature[i] - t0[i];
+        assert!((dtemp - 10.0).abs() < 1e-9, "sphere {i}: ΔT {dtemp}");
+        let expect = r0[i] * (1.0 + 1e-3 * dtemp);
+        assert!((s.dem.particles.radius[i] - expect).abs() <= 1e-15 * expect);
+        assert!((s.radius_rate[i] - (expect - r0[i]) / dt).abs() <= 1e-9 * r0[i]);
+    }
+}
+
+#[test]
+fn bad_input_names_the_item() {
+    let config = params(Skeleton::Fixed, RemeshCriteriaParams::default())
+        .validate()
+        .expect("params");
+    let packing = thm_dem::packing::lattice_packing(
+        thm_dem::Kinematics::SpheresInPlane,
+        [NX, NY, 1],
+        SPACING,
+        7,
+    )
+    .expect("packing");
+    let dem = packing.to_state(2600.0, 300.0).expect("dem");
+    let err = PoreScaleState::new(
+        &config,
+        dem.clone(),
+        &fluid(),
+        InitialFluid {
+            pressure: -1.0,
+            liquid_fraction: 0.8,
+        },
+        |_| 300.0,
+    )
+    .expect_err("negative pressure");
+    assert!(err.to_string().contains("initial pressure"), "{err}");
+    let err = PoreScaleState::new(
+        &config,
+        dem,
+        &fluid(),
+        InitialFluid {
+            pressure: 1e5,
+            liquid_fraction: 0.8,
+        },
+        |p| if p[1] > 0.01 { f64::NAN } else { 300.0 },
+    )
+    .expect_err("NaN temperature");
+    assert!(matches!(err, CouplingError::Unphysical { place: "cell", .. }), "{err}");
+    // An unphysical flow state is caught at the stage boundary, naming the pore.
+    let mut s = state(&config);
+    s.flow.pressure[3] = -5.0;
+    let err = stages::check_flow(&s.flow).expect_err("negative pressure");
+    assert!(err.to_string().contains("pore 3"), "{err}");
+    // A step length that is not positive.
+    let mut st = stepper(&config, &s);
+    let err = st.step(&mut s, 0.0).expect_err("dt = 0");
+    assert!(err.to_string().contains("`dt`"), "{err}");
+    let mut p = params(Skeleton::Fixed, RemeshCriteriaParams::default());
+    p.thermal_expansion = f64::NAN;
+    assert!(p.validate().expect_err("NaN").to_string().contains("thermal_expansion"));
+}
