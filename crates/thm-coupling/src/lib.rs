@@ -3,15 +3,51 @@
 //! The only crate that knows two physics at once: it adapts one crate's output to another's
 //! input and sequences their steps.
 //!
-//! ## DEM–CFD–heat (Krzaczek, Nitka & Tejchman 2023, Fig. 7)
+//! ## DEM–CFD–heat (Krzaczek, Nitka & Tejchman 2023, A-Fig. 7): [`pore_scale`]
 //!
-//! Per DEM step Δt_D: fluid pressure and channel shear forces (A-Eqs. 52–54, thickness = the
-//! largest sphere diameter) from `thm-vpn-flow` are applied to the spheres of `thm-dem`; the DEM
-//! motion gives each virtual pore's dV/dt through `thm-vpn-mesh`; the flow (`thm-vpn-flow`, with
-//! the closure of `thm-eos`) and heat (`thm-fvm-heat`) solvers sub-cycle with Δt_C; the solid
-//! cells' volume-average temperatures change the sphere radii (A-Eq. 55); contact normal
-//! stresses set the S2S apertures (A-Eq. 8); the mesh is rebuilt and fields remapped
-//! conservatively when the configuration has changed enough.
+//! One coupled step of length Δt_C over a caller-owned [`pore_scale::PoreScaleState`] (spheres,
+//! moving mesh, pore fluid, cell temperatures) runs eight named stages
+//! ([`pore_scale::stages`]), each a function that can be tested alone:
+//!
+//! 1. fluid forces on the spheres from the pore pressures and the S2S wall shear
+//!    (A-Eqs. 52–54, `A_k = 2 r_max e_k`, thickness = the largest sphere diameter);
+//! 2. `ceil(Δt_C / Δt_D)` DEM steps (`thm-dem`, A-Eqs. 1–7) with those forces held;
+//! 3. the mesh follows the spheres (`thm-vpn-mesh`), T2T apertures on the moved faces (A-Eq. 9);
+//! 4. S2S apertures from the normal stress of each contact (A-Eq. 8);
+//! 5. the flow over Δt_C (`thm-vpn-flow`, closure A-Eq. 29 through `thm-eos`), each pore's
+//!    dV/dt (A-Eq. 25) the change of its cell volume over the step;
+//! 6. heat over Δt_C (`thm-fvm-heat`), advected by the step's mean channel mass rates, fluid
+//!    capacities from the phase masses, fluid–solid interfaces by the Nusselt correlations
+//!    (A-Eqs. 43–45); the pores are then closed again at their new temperatures;
+//! 7. volume-average sphere temperatures to radii (A-Eq. 55);
+//! 8. remesh on the trigger of `thm-vpn-mesh` and conservative remap of liquid mass, gas mass,
+//!    fluid energy and solid energy.
+//!
+//! A fixed skeleton (A-Sect. 6 case b, the fluid–heat cases of A-Sects. 4–5) is
+//! [`pore_scale::Skeleton::Fixed`]: the same step without stages 2–4, 7 and 8.
+//!
+//! ### Choices where the paper is silent
+//!
+//! 1. **Coupling lag.** A-Fig. 7 exchanges forces and volume rates "in each time step Δt_D";
+//!    here the fluid forces are held over the DEM steps of one coupled step Δt_C and the flow
+//!    and heat see the skeleton at its end. Δt_C = Δt_D reproduces the paper's exchange.
+//! 2. **Volume rate.** dV/dt of a pore is `(V_mesh^{n+1} − V_flow^n)/Δt_C`, not the
+//!    instantaneous rate of the vertex velocities, so the flow's pore volumes never drift from
+//!    the mesh's.
+//! 3. **Energy with changing mass.** A-Eq. 39 updates `ρ E V` from `n` to `n + 1`. The heat
+//!    solver holds a cell's capacity fixed over a step, so the coupling first re-expresses each
+//!    temperature at the new capacity (`T ← T_ref + C^n/C^{n+1} (T − T_ref)`), which with the
+//!    advective enthalpy `ṁ c_p (T_f − T_ref)` of the same mass fluxes conserves `Σ C (T − T_ref)`
+//!    exactly; the same holds for solid cells whose volume changed (the solid keeps its mass in
+//!    A-Eq. 55 while the heat solver uses `ρ_s V`).
+//! 4. **Contacts of the mesh.** Every overlapping pair of circles is a mesh contact; its σ_n is
+//!    that of the DEM contact of the pair (zero where the DEM has no active contact).
+//! 5. **Remap.** Pressures and fractions are not remapped: they follow from the remapped masses
+//!    (A-Sect. 2.4); temperatures are remapped energy over the new capacities, and the spheres'
+//!    T_avg^n is reset to the new cells' mean so that the remap changes no radius.
+//!
+//! Units: SI throughout (m, kg, s, K, Pa, J, W). Valid where the composed crates are: laminar
+//! channel flow, pore fluids inside the EOS's range, Δt_D below the DEM's critical step.
 //!
 //! ## MPM×DEM (Zhao et al. 2022, Sect. 4, Algorithm 1)
 //!
@@ -21,19 +57,19 @@
 //!
 //! ## Status
 //!
-//! The schemes are assembled here once the single-physics crates they compose are complete;
-//! this crate holds no coupling code yet.
+//! The pore-scale step, its tests and the conservation case are in place. Not yet here: an
+//! implicit pressure step for water-filled pores (the explicit flow limit is about 10⁻⁸ s
+//! there), the paper's coupled scenarios (A-Sects. 4–6) as `thm run` kinds, and the MPM×DEM
+//! scheme.
+//!
+//! ## Verification ([`verification::cases`])
+//!
+//! `coupling/pore_scale_closed_conservation`: liquid mass, gas mass and thermal energy of a
+//! closed, adiabatic bonded packing constant to 10⁻¹² relative, with a free skeleton remeshed
+//! almost every step and with a fixed skeleton.
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod pore_scale;
 
-pub mod verification {
-    //! Verification cases of this crate, collected by `cargo xtask verify`.
-    use thm_verify::Case;
-
-    /// All verification cases of `thm-coupling`.
-    pub fn cases() -> Vec<Case> {
-        Vec::new()
-    }
-}
+pub mod verification;

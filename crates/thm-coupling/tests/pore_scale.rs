@@ -10,7 +10,12 @@ use thm_coupling::pore_scale::{
 use thm_vpn_mesh::{NONE, RemeshCriteriaParams};
 
 /// Steps a fresh run; returns the state and the number of remeshes.
-fn run(skeleton: Skeleton, remesh: RemeshCriteriaParams, steps: usize, dt: f64) -> (PoreScaleState, u64) {
+fn run(
+    skeleton: Skeleton,
+    remesh: RemeshCriteriaParams,
+    steps: usize,
+    dt: f64,
+) -> (PoreScaleState, u64) {
     let config = params(skeleton, remesh).validate().expect("params");
     let mut s = state(&config);
     let mut st = stepper(&config, &s);
@@ -26,7 +31,12 @@ fn run(skeleton: Skeleton, remesh: RemeshCriteriaParams, steps: usize, dt: f64) 
 fn bits(s: &PoreScaleState) -> Vec<u64> {
     let p = &s.dem.particles;
     let mut out: Vec<u64> = Vec::new();
-    for x in p.position.iter().chain(&p.velocity).chain(&p.angular_velocity) {
+    for x in p
+        .position
+        .iter()
+        .chain(&p.velocity)
+        .chain(&p.angular_velocity)
+    {
         out.extend([x.x.to_bits(), x.y.to_bits(), x.z.to_bits()]);
     }
     for v in [
@@ -56,7 +66,9 @@ fn bits(s: &PoreScaleState) -> Vec<u64> {
 fn closed_moving_packing_keeps_phase_masses_and_energy_through_remeshes() {
     // Free spheres expanding and contracting with a 60 K gradient, closed and adiabatic, the
     // mesh rebuilt on every small change: liquid and gas mass and Σ C (T − T_ref) stay.
-    let config = params(Skeleton::Free, eager_remesh()).validate().expect("params");
+    let config = params(Skeleton::Free, eager_remesh())
+        .validate()
+        .expect("params");
     let heat = config.params().heat.clone();
     let mut s = state(&config);
     let mut st = stepper(&config, &s);
@@ -68,13 +80,24 @@ fn closed_moving_packing_keeps_phase_masses_and_energy_through_remeshes() {
         remeshes += u64::from(r.remeshed.is_some());
         assert!(r.dem_steps == 50);
         let rel = |a: f64, b: f64| (a / b - 1.0).abs();
-        assert!(rel(s.liquid_mass(), mq0) < 1e-12, "liquid {}", rel(s.liquid_mass(), mq0));
-        assert!(rel(s.gas_mass(), mp0) < 1e-12, "gas {}", rel(s.gas_mass(), mp0));
+        assert!(
+            rel(s.liquid_mass(), mq0) < 1e-12,
+            "liquid {}",
+            rel(s.liquid_mass(), mq0)
+        );
+        assert!(
+            rel(s.gas_mass(), mp0) < 1e-12,
+            "gas {}",
+            rel(s.gas_mass(), mp0)
+        );
         let de = (s.thermal_energy(&heat) - e0).abs() / e0.abs();
         assert!(de < 1e-12, "energy {de}");
         moved = moved.max(s.radius_rate.iter().fold(0.0f64, |m, r| m.max(r.abs())));
     }
-    assert!(remeshes >= 10, "the test must exercise the remap: {remeshes} remeshes");
+    assert!(
+        remeshes >= 10,
+        "the test must exercise the remap: {remeshes} remeshes"
+    );
     assert!(moved > 0.0, "radii must change (A-Eq. 55)");
     assert_eq!(s.remeshes, remeshes);
 }
@@ -122,7 +145,9 @@ fn one_and_two_threads_give_the_same_bits() {
 
 #[test]
 fn a_restored_run_continues_bit_for_bit() {
-    let config = params(Skeleton::Free, eager_remesh()).validate().expect("params");
+    let config = params(Skeleton::Free, eager_remesh())
+        .validate()
+        .expect("params");
     let mut s = state(&config);
     let mut st = stepper(&config, &s);
     for _ in 0..4 {
@@ -184,7 +209,12 @@ fn uniform_pore_pressure_pushes_the_spheres_as_the_pore_boundary_says() {
             expected[k]
         );
         assert_eq!(
-            s.dem.particles.external_force.iter().map(|f| [f.x, f.y][k]).sum::<f64>(),
+            s.dem
+                .particles
+                .external_force
+                .iter()
+                .map(|f| [f.x, f.y][k])
+                .sum::<f64>(),
             force.iter().map(|f| f[k]).sum::<f64>()
         );
     }
@@ -212,7 +242,8 @@ fn sphere_radii_follow_the_mean_solid_temperature() {
     for t in &mut s.heat.temperature {
         *t += 10.0;
     }
-    stages::sphere_radii(&s.mesh, &s.heat, 1e-3, &mut s.dem, &mut s.radius_rate, dt).expect("radii");
+    stages::sphere_radii(&s.mesh, &s.heat, 1e-3, &mut s.dem, &mut s.radius_rate, dt)
+        .expect("radii");
     for i in 0..r0.len() {
         let dtemp = s.dem.particles.temperature[i] - t0[i];
         assert!((dtemp - 10.0).abs() < 1e-9, "sphere {i}: ΔT {dtemp}");
@@ -258,7 +289,10 @@ fn bad_input_names_the_item() {
         |p| if p[1] > 0.01 { f64::NAN } else { 300.0 },
     )
     .expect_err("NaN temperature");
-    assert!(matches!(err, CouplingError::Unphysical { place: "cell", .. }), "{err}");
+    assert!(
+        matches!(err, CouplingError::Unphysical { place: "cell", .. }),
+        "{err}"
+    );
     // An unphysical flow state is caught at the stage boundary, naming the pore.
     let mut s = state(&config);
     s.flow.pressure[3] = -5.0;
@@ -270,5 +304,10 @@ fn bad_input_names_the_item() {
     assert!(err.to_string().contains("`dt`"), "{err}");
     let mut p = params(Skeleton::Fixed, RemeshCriteriaParams::default());
     p.thermal_expansion = f64::NAN;
-    assert!(p.validate().expect_err("NaN").to_string().contains("thermal_expansion"));
+    assert!(
+        p.validate()
+            .expect_err("NaN")
+            .to_string()
+            .contains("thermal_expansion")
+    );
 }

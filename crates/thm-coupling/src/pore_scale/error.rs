@@ -19,16 +19,16 @@ pub enum CouplingError {
     },
     /// The DEM (contact law, stepper, particle state).
     #[error("DEM: {0}")]
-    Dem(thm_dem::DemError),
+    Dem(#[from] thm_dem::DemError),
     /// The mesher, mesh motion or remap.
     #[error("pore mesh: {0}")]
-    Mesh(thm_vpn_mesh::MeshError),
+    Mesh(#[from] thm_vpn_mesh::MeshError),
     /// The flow solver or the fluid model.
     #[error("flow: {0}")]
-    Flow(thm_vpn_flow::FlowError),
+    Flow(#[from] thm_vpn_flow::FlowError),
     /// The heat solver.
     #[error("heat: {0}")]
-    Heat(thm_fvm_heat::HeatError),
+    Heat(#[from] thm_fvm_heat::HeatError),
     /// An unphysical or non-finite value at a stage boundary.
     #[error("{stage}: {quantity} = {value} in {place} {index} at coupled step {step} is {why}")]
     Unphysical {

@@ -113,7 +113,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
         let (network, heat_model, heat_geometry) = derived(&config, state)?;
         let input = FlowInput::liquid_at_rest(&state.mesh.mesh, 1.0, 1.0);
         Ok(Self {
-            flow: FlowStepper::new(config.flow.clone()),
+            flow: FlowStepper::new(config.flow),
             config,
             fluid,
             dem: None,
@@ -298,7 +298,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
                 ..self.config.params.dem
             };
             let config = params.validate().map_err(CouplingError::Dem)?;
-            self.dem = Some((h, Stepper::new(self.config.law.clone(), config)));
+            self.dem = Some((h, Stepper::new(self.config.law, config)));
         }
         match self.dem.as_mut() {
             Some((_, s)) => Ok(s),

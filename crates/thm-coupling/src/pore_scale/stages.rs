@@ -3,7 +3,8 @@
 
 use thm_dem::{CohesiveFrictional, DemState, Stepper, Vec3};
 use thm_fvm_heat::{
-    FlowInput, HeatGeometry, HeatModel, HeatParams, HeatState, HeatStepper, sphere_mean_temperatures,
+    FlowInput, HeatGeometry, HeatModel, HeatParams, HeatState, HeatStepper,
+    sphere_mean_temperatures,
 };
 use thm_vpn_flow::{FlowConfig, FlowState, FlowStepper, Network, PoreFluid, add_sphere_forces};
 use thm_vpn_mesh::{
@@ -14,7 +15,6 @@ use thm_vpn_mesh::{
 use super::error::CouplingError;
 use super::params::HeatScheme;
 use super::state::{circles_of, contact_normal_stress, contacts_of, fluid_capacity};
-
 
 /// Stage 1 (A-Eqs. 52–54): the fluid forces on the spheres from the pore pressures and the
 /// S2S wall shear, written into `dem.particles.external_force` (x, y; z = 0). `force` is
@@ -411,11 +411,12 @@ pub fn remesh(
         let c = c as usize;
         mq[c] = state.flow.liquid_mass[q];
         mp[c] = state.flow.gas_mass[q];
-        e_fluid[c] = fluid_capacity(mq[c], mp[c], heat_params) * (state.heat.temperature[c] - t_ref);
+        e_fluid[c] =
+            fluid_capacity(mq[c], mp[c], heat_params) * (state.heat.temperature[c] - t_ref);
     }
-    for c in 0..no {
+    for (c, e) in e_solid.iter_mut().enumerate() {
         if !old_mesh.cell_kind[c].is_fluid() {
-            e_solid[c] = solid_rc * old_mesh.cell_volume(c) * (state.heat.temperature[c] - t_ref);
+            *e = solid_rc * old_mesh.cell_volume(c) * (state.heat.temperature[c] - t_ref);
         }
     }
     let remap = |filter, old: &[f64]| -> Result<Vec<f64>, CouplingError> {
@@ -448,7 +449,7 @@ pub fn remesh(
     for (q, &c) in new_network.pore_cell().iter().enumerate() {
         let c = c as usize;
         let cap = fluid_capacity(nq[c], np_[c], heat_params);
-        if !(cap > 0.0) {
+        if cap.is_nan() || cap <= 0.0 {
             return Err(CouplingError::Unphysical {
                 stage: "remesh",
                 quantity: "fluid mass",

@@ -4,7 +4,9 @@ use serde::{Deserialize, Serialize};
 use thm_dem::DemState;
 use thm_fvm_heat::{HeatParams, HeatState};
 use thm_vpn_flow::{FlowState, Network, PoreFluid};
-use thm_vpn_mesh::{CellKind, Circle, Contact, PackingMesh, mesh_packing, mesher::overlapping_pairs};
+use thm_vpn_mesh::{
+    CellKind, Circle, Contact, PackingMesh, mesh_packing, mesher::overlapping_pairs,
+};
 
 use super::error::CouplingError;
 use super::params::PoreScaleConfig;
@@ -130,8 +132,16 @@ impl PoreScaleState {
         )
         .map_err(CouplingError::Flow)?;
         let np = network.n_pores();
-        let cell_temperature: Vec<f64> = mesh.mesh.cell_centroid.iter().map(|&x| temperature(x)).collect();
-        if let Some(c) = cell_temperature.iter().position(|t| !(t.is_finite() && *t > 0.0)) {
+        let cell_temperature: Vec<f64> = mesh
+            .mesh
+            .cell_centroid
+            .iter()
+            .map(|&x| temperature(x))
+            .collect();
+        if let Some(c) = cell_temperature
+            .iter()
+            .position(|t| !(t.is_finite() && *t > 0.0))
+        {
             return Err(CouplingError::Unphysical {
                 stage: "initial state",
                 quantity: "temperature",
@@ -213,11 +223,7 @@ pub fn cell_capacities(state: &PoreScaleState, heat: &HeatParams) -> Vec<f64> {
     let mut p = 0usize;
     for (c, kind) in mesh.cell_kind.iter().enumerate() {
         if kind.is_fluid() {
-            cap[c] = fluid_capacity(
-                state.flow.liquid_mass[p],
-                state.flow.gas_mass[p],
-                heat,
-            );
+            cap[c] = fluid_capacity(state.flow.liquid_mass[p], state.flow.gas_mass[p], heat);
             p += 1;
         }
     }
