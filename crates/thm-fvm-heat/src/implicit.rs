@@ -15,7 +15,7 @@ use thm_vpn_mesh::{NONE, PoreMesh};
 
 use crate::geometry::{BoundaryFace, FaceGeometry};
 use crate::params::{HeatModel, SideCondition};
-use crate::stepper::{boundary_conductance, face_conductivity};
+use crate::stepper::{boundary_conductance, face_conductivity, limit_cross};
 use crate::{FlowInput, HeatError, HeatGeometry, HeatState, HeatStepper};
 
 #[inline]
@@ -94,7 +94,11 @@ impl HeatStepper {
                     couple(c0, c1, lf * conductance, &mut diag);
                     let cross = [lf * cross[0], lf * cross[1]];
                     let (g0, g1) = (self.gradient[c0], self.gradient[c1]);
-                    let s = dot(cross, [0.5 * (g0[0] + g1[0]), 0.5 * (g0[1] + g1[1])]);
+                    let s = limit_cross(
+                        dot(cross, [0.5 * (g0[0] + g1[0]), 0.5 * (g0[1] + g1[1])]),
+                        lf * conductance * (temp[c1] - temp[c0]),
+                        model.cross_limit,
+                    );
                     rhs[c0] += s;
                     rhs[c1] -= s;
                 }

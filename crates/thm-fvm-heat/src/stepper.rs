@@ -900,8 +900,13 @@ impl HeatStepper {
                             let lf = face_conductivity(lam[c0], lam[c1], weight0);
                             let (g0, g1) = (grad[c0], grad[c1]);
                             let mean = [0.5 * (g0[0] + g1[0]), 0.5 * (g0[1] + g1[1])];
-                            lf * conductance * (temp[c1] - t0)
-                                + dot([lf * cross[0], lf * cross[1]], mean)
+                            let two_point = lf * conductance * (temp[c1] - t0);
+                            two_point
+                                + limit_cross(
+                                    dot([lf * cross[0], lf * cross[1]], mean),
+                                    two_point,
+                                    model.cross_limit,
+                                )
                         }
                         FaceGeometry::Interface { index, .. } => {
                             law[index as usize].g * (temp[c1 as usize] - t0)
@@ -1083,6 +1088,19 @@ impl HeatStepper {
     }
 }
 
+/// The cross-diffusion heat rate `cross` of a face, capped at `limit` times the magnitude of
+/// its two-point rate (`None`: as computed). See [`crate::CrossDiffusion`].
+#[inline]
+pub(crate) fn limit_cross(cross: f64, two_point: f64, limit: Option<f64>) -> f64 {
+    match limit {
+        None => cross,
+        Some(ratio) => {
+            let cap = ratio * two_point.abs();
+            cross.clamp(-cap, cap)
+        }
+    }
+}
+
 /// Conductance \[W/K\] of one face in the stability limit: λ_f |A| / (ds n·e_s) inside a
 /// medium (A-Eq. 47's primary term), the series conductance of a fluid–solid interface, and
 /// at an outer boundary the conductance of its case plus 2 ṁ c_p where fluid flows out (`m`,
@@ -1105,7 +1123,12 @@ fn face_stability_conductance(
             conductance,
             weight0,
             ..
-        } => face_conductivity(lam[c0], lam[c1 as usize], weight0) * conductance,
+        } => {
+            // A limited cross term can add up to `ratio` times the two-point rate.
+            face_conductivity(lam[c0], lam[c1 as usize], weight0)
+                * conductance
+                * (1.0 + model.cross_limit.unwrap_or(0.0))
+        }
         FaceGeometry::Interface { index, .. } => law[index as usize].g,
         FaceGeometry::Boundary { slot } => {
             let bf = &geometry.boundary[slot as usize];

@@ -15,8 +15,8 @@ use thm_vpn_mesh::packing::{PackingSpec, overlap_contacts, random_packing};
 use thm_vpn_mesh::{BoundarySide, CellKind, MeshParams, Outline, PoreMesh, mesh_packing};
 
 use crate::{
-    BoundaryCondition, BoundaryParams, FlowInput, GradientScheme, HeatGeometry, HeatModel,
-    HeatParams, HeatState, HeatStepper, InterfaceModel, PhaseParams, SolidParams,
+    BoundaryCondition, BoundaryParams, CrossDiffusion, FlowInput, GradientScheme, HeatGeometry,
+    HeatModel, HeatParams, HeatState, HeatStepper, InterfaceModel, PhaseParams, SolidParams,
     TemperatureSchedule,
 };
 
@@ -168,6 +168,7 @@ fn bar_params(mat: &BarMaterial, liquid: PhaseParams) -> HeatParams {
         stability_safety: 0.8,
         gradient: GradientScheme::default(),
         interface: InterfaceModel::Nusselt,
+        cross_diffusion: CrossDiffusion::Full,
     }
 }
 
@@ -629,6 +630,7 @@ fn unit_fluid_params(conductivity: f64, boundaries: Vec<BoundaryParams>) -> Heat
         stability_safety: 0.8,
         gradient: GradientScheme::default(),
         interface: InterfaceModel::Nusselt,
+        cross_diffusion: CrossDiffusion::Full,
     }
 }
 

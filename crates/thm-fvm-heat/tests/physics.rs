@@ -330,6 +330,9 @@ fn bad_parameters_are_typed_errors() {
     p.solid.density = f64::NAN;
     assert_eq!(field_of(&p), "solid.density");
     let mut p = table1_params();
+    p.cross_diffusion = thm_fvm_heat::CrossDiffusion::Limited { ratio: -0.5 };
+    assert_eq!(field_of(&p), "cross_diffusion.ratio");
+    let mut p = table1_params();
     p.boundaries = vec![bc(
         BoundarySide::Top,
         BoundaryCondition::Temperature {

@@ -5,7 +5,7 @@ mod common;
 
 use common::{random_input, random_mesh, random_temperatures, table1_params};
 use proptest::prelude::*;
-use thm_fvm_heat::{FlowInput, HeatGeometry, HeatModel, HeatState, HeatStepper};
+use thm_fvm_heat::{CrossDiffusion, FlowInput, HeatGeometry, HeatModel, HeatState, HeatStepper};
 use thm_vpn_mesh::PoreMesh;
 
 fn energy(stepper: &HeatStepper, t: &[f64]) -> (f64, f64) {
@@ -123,6 +123,44 @@ proptest! {
         stepper.implicit_step(&model, &geometry, &mesh, &input, &mut state, 500.0).unwrap();
         let (e1, _) = energy(&stepper, &state.temperature);
         prop_assert!((e1 - e0).abs() <= 1e-11 * scale, "dE = {} J of {} J", e1 - e0, scale);
+    }
+
+    /// Limited cross diffusion (`ratio` ≤ 1): every face carries heat from hot to cold at no
+    /// more than (1 + ratio) times its two-point rate, and the stability limit counts that
+    /// factor, so an explicit conduction sub-step is a convex combination of neighbour
+    /// temperatures: no new extrema. The limited face rate is still antisymmetric, so energy
+    /// is conserved, explicitly and with the backward-Euler step.
+    #[test]
+    fn limited_cross_diffusion_conserves_energy_and_creates_no_extrema(
+        seed in any::<u64>(), nx in 2usize..7, ny in 2usize..7, ratio in 0.0f64..=1.0,
+    ) {
+        let mesh = random_mesh(seed, nx, ny);
+        let mut params = table1_params();
+        params.cross_diffusion = CrossDiffusion::Limited { ratio };
+        // The whole limit: the bound must hold without the default safety margin.
+        params.stability_safety = 1.0;
+        let model = HeatModel::new(&params, &mesh).unwrap();
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
+        let input = random_input(seed, &mesh, 0.0);
+        let mut state = HeatState {
+            time: 0.0,
+            steps: 0,
+            temperature: random_temperatures(seed, mesh.n_cells()),
+        };
+        let range = |t: &[f64]| t.iter().fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+        let (lo, hi) = range(&state.temperature);
+        let mut stepper = HeatStepper::new();
+        stepper.prepare(&model, &geometry, &mesh, &input, &state).unwrap();
+        let (e0, scale) = energy(&stepper, &state.temperature);
+        let report = stepper.step(&model, &geometry, &mesh, &input, &mut state, 50.0).unwrap();
+        let (e1, _) = energy(&stepper, &state.temperature);
+        let tol = 1e-14 * scale * (report.substeps as f64 + 1.0) * mesh.n_cells() as f64;
+        prop_assert!((e1 - e0).abs() <= tol, "explicit dE = {} J, tol {} J", e1 - e0, tol);
+        let (a, b) = range(&state.temperature);
+        prop_assert!(a >= lo - 1e-9 && b <= hi + 1e-9, "range [{a}, {b}] left [{lo}, {hi}]");
+        stepper.implicit_step(&model, &geometry, &mesh, &input, &mut state, 500.0).unwrap();
+        let (e2, _) = energy(&stepper, &state.temperature);
+        prop_assert!((e2 - e0).abs() <= 1e-11 * scale, "implicit dE = {} J of {} J", e2 - e0, scale);
     }
 
     /// 1 and 2 rayon threads give identical bits (explicit step with advection).
