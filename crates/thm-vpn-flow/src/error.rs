@@ -175,4 +175,12 @@ pub enum FlowError {
         /// The pore that set the limit.
         pore: usize,
     },
+    /// The sparse solve of the implicit pressure step failed.
+    #[error("step {step}: implicit pressure solve failed: {message}")]
+    Solver {
+        /// Outer step counter.
+        step: u64,
+        /// The solver's message.
+        message: String,
+    },
 }

@@ -546,13 +546,13 @@ pub fn close_pores(
 /// The explicit stepper: scratch buffers only (the state is the caller's).
 #[derive(Debug, Clone)]
 pub struct FlowStepper {
-    config: FlowConfig,
-    channel: Vec<ChannelFlux>,
-    link: Vec<ChannelFlux>,
-    rates: Vec<PoreRate>,
-    inflow: Vec<GroupInflow>,
-    channel_mass: Vec<f64>,
-    link_mass: Vec<f64>,
+    pub(crate) config: FlowConfig,
+    pub(crate) channel: Vec<ChannelFlux>,
+    pub(crate) link: Vec<ChannelFlux>,
+    pub(crate) rates: Vec<PoreRate>,
+    pub(crate) inflow: Vec<GroupInflow>,
+    pub(crate) channel_mass: Vec<f64>,
+    pub(crate) link_mass: Vec<f64>,
 }
 
 impl FlowStepper {
@@ -598,7 +598,7 @@ impl FlowStepper {
         &self.link_mass
     }
 
-    fn prepare(
+    pub(crate) fn prepare(
         &mut self,
         network: &Network,
         state: &FlowState,
