@@ -16,8 +16,8 @@ use thm_vpn_flow::{EosFluid, FlowParameters};
 use thm_vpn_mesh::{MeshParams, Outline, RemeshCriteriaParams};
 
 use crate::pore_scale::{
-    CouplingError, HeatScheme, InitialFluid, PoreScaleConfig, PoreScaleParams, PoreScaleState,
-    PoreScaleStepper, Skeleton,
+    CouplingError, FlowScheme, HeatScheme, InitialFluid, PoreScaleConfig, PoreScaleParams,
+    PoreScaleState, PoreScaleStepper, Skeleton,
 };
 
 /// All verification cases of `thm-coupling`.
@@ -67,6 +67,7 @@ pub fn lattice_params(skeleton: Skeleton, remesh: RemeshCriteriaParams) -> PoreS
         ),
         remesh,
         flow: FlowParameters::default(),
+        flow_scheme: FlowScheme::Explicit,
         flow_boundaries: Vec::new(),
         boundary_reduction_factor: 0.0115,
         heat: HeatParams::paper_a_table_1(),
@@ -107,8 +108,18 @@ pub fn eager_remesh() -> RemeshCriteriaParams {
 
 /// Largest relative drift of liquid mass, gas mass and thermal energy over `steps` coupled
 /// steps of `dt`, and the number of remeshes.
-fn drift(skeleton: Skeleton, steps: usize, dt: f64) -> Result<([f64; 3], u64), CouplingError> {
-    let config = lattice_params(skeleton, eager_remesh()).validate()?;
+fn drift(
+    skeleton: Skeleton,
+    implicit: bool,
+    steps: usize,
+    dt: f64,
+) -> Result<([f64; 3], u64), CouplingError> {
+    let mut params = lattice_params(skeleton, eager_remesh());
+    if implicit {
+        params.flow_scheme = FlowScheme::Implicit;
+        params.heat_scheme = HeatScheme::Implicit;
+    }
+    let config = params.validate()?;
     let heat = config.params().heat.clone();
     let mut s = lattice_state(&config)?;
     let mut stepper = PoreScaleStepper::new(config, water_air(), &s)?;
@@ -126,11 +137,26 @@ fn drift(skeleton: Skeleton, steps: usize, dt: f64) -> Result<([f64; 3], u64), C
 
 fn closed_conservation_case() -> Result<CaseOutput, CaseError> {
     let mut out = CaseOutput::default();
-    for (label, skeleton, steps, dt) in [
-        ("free skeleton", Skeleton::Free, 20, 1e-5),
-        ("fixed skeleton", Skeleton::Fixed, 20, 1e-4),
+    for (label, skeleton, implicit, steps, dt) in [
+        ("free skeleton", Skeleton::Free, false, 20, 1e-5),
+        ("fixed skeleton", Skeleton::Fixed, false, 20, 1e-4),
+        (
+            "free skeleton, implicit flow and heat",
+            Skeleton::Free,
+            true,
+            20,
+            1e-5,
+        ),
+        (
+            "fixed skeleton, implicit flow and heat",
+            Skeleton::Fixed,
+            true,
+            20,
+            0.1,
+        ),
     ] {
-        let (worst, remeshes) = drift(skeleton, steps, dt).map_err(CaseError::from_display)?;
+        let (worst, remeshes) =
+            drift(skeleton, implicit, steps, dt).map_err(CaseError::from_display)?;
         for (k, what) in ["liquid mass", "gas mass", "thermal energy"]
             .iter()
             .enumerate()

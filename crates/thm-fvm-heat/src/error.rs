@@ -81,18 +81,6 @@ pub enum HeatError {
         /// The value.
         value: f64,
     },
-    /// The implicit step only handles conduction; a non-zero mass flux was given.
-    #[error(
-        "implicit step: {what}[{index}] = {value} kg/s, but the implicit step is conduction-only"
-    )]
-    AdvectionInImplicitStep {
-        /// `"channel_mass_flux"` or `"boundary_mass_flux"`.
-        what: &'static str,
-        /// Channel or face index.
-        index: usize,
-        /// The mass flux.
-        value: f64,
-    },
     /// The sparse solver of the implicit step failed.
     #[error("implicit step: sparse solver failed: {message}")]
     Solver {

@@ -1,5 +1,5 @@
-//! Backward-Euler conduction step on a sparse symmetric positive-definite system (`faer`
-//! sparse Cholesky), for the long cooling runs where explicit sub-steps are wasteful.
+//! Backward-Euler step on a sparse system (`faer` sparse Cholesky for conduction alone, LU
+//! when mass flows), for the long runs where explicit sub-steps are wasteful.
 //!
 //! (C/Δt + K) T^{n+1} = C/Δt T^n + b^{n+1} + s^n, with K the two-point conductances of every
 //! face law (A-Eq. 47 primary term, fluid–solid interface, cases I and III) and of the S2S
@@ -7,6 +7,8 @@
 //! and boundary tangential corrections evaluated at T^n (deferred correction; they are
 //! antisymmetric between the two cells of a face, so energy stays conserved). K has zero row
 //! sums apart from the boundary conductances and is symmetric, so the matrix is SPD.
+//! Advection adds first-order upwind terms m c_p,up T_up^{n+1} (non-symmetric): with
+//! divergence-free fluxes the matrix stays an M-matrix, so temperatures stay bounded.
 
 use faer::Side;
 use faer::linalg::solvers::Solve;
@@ -24,8 +26,9 @@ fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
 }
 
 impl HeatStepper {
-    /// One backward-Euler conduction step of length `dt` \[s\]. Advection is not part of this
-    /// step: any non-zero mass flux in `input` is an error.
+    /// One backward-Euler step of length `dt` \[s\]: conduction as in the module doc and,
+    /// where `input` carries mass fluxes, first-order upwind advection (the explicit step's
+    /// A-Eq. 48 reconstruction is not used here), solved by sparse LU instead of Cholesky.
     pub fn implicit_step(
         &mut self,
         model: &HeatModel,
@@ -43,18 +46,6 @@ impl HeatStepper {
             });
         }
         self.prepare(model, geometry, mesh, input, state)?;
-        for (what, fluxes) in [
-            ("channel_mass_flux", &input.channel_mass_flux),
-            ("boundary_mass_flux", &input.boundary_mass_flux),
-        ] {
-            if let Some(k) = fluxes.iter().position(|&m| m != 0.0) {
-                return Err(HeatError::AdvectionInImplicitStep {
-                    what,
-                    index: k,
-                    value: fluxes[k],
-                });
-            }
-        }
         let t_old = state.time;
         let t_new = t_old + dt;
         // Gradients at T^n for the deferred corrections.
@@ -66,6 +57,8 @@ impl HeatStepper {
         let mut rhs: Vec<f64> = (0..n).map(|c| self.capacity[c] / dt * temp[c]).collect();
         let mut diag: Vec<f64> = (0..n).map(|c| self.capacity[c] / dt).collect();
         let mut off: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(mesh.n_faces() + n);
+        // Advection entries (both triangles), only when something flows.
+        let mut full: Vec<Triplet<usize, usize, f64>> = Vec::new();
         let mut couple = |a: usize, b: usize, g: f64, diag: &mut [f64]| {
             if g == 0.0 {
                 return;
@@ -138,21 +131,79 @@ impl HeatStepper {
             let [a, b] = mesh.channels.cells[k].map(|c| c as usize);
             couple(a, b, self.channel_conductance[k], &mut diag);
         }
+        // Advection, first-order upwind at T^{n+1}: a channel carries m c_p,up (T_up − T_ref)
+        // from its upwind cell to the other; a boundary face carries its outflow at the cell
+        // temperature and its inflow at the side's prescribed temperature (case I) or else at
+        // the cell temperature. Each transfer leaves one row as it enters the other, so
+        // energy stays conserved; the matrix is no longer symmetric.
+        let t_ref = model.reference_temperature;
+        let cp = &self.specific_heat;
+        let mut advected = false;
+        for (k, &m) in input.channel_mass_flux.iter().enumerate() {
+            if m == 0.0 {
+                continue;
+            }
+            advected = true;
+            let [a, b] = mesh.channels.cells[k].map(|c| c as usize);
+            let (up, down) = if m > 0.0 { (a, b) } else { (b, a) };
+            let rate = m.abs() * cp[up];
+            diag[up] += rate;
+            rhs[up] += rate * t_ref;
+            full.push(Triplet::new(down, up, -rate));
+            rhs[down] -= rate * t_ref;
+        }
+        for (f, &m) in input.boundary_mass_flux.iter().enumerate() {
+            if m == 0.0 {
+                continue;
+            }
+            let FaceGeometry::Boundary { slot } = geometry.face[f] else {
+                continue;
+            };
+            advected = true;
+            let c = mesh.face_cells[f][0] as usize;
+            let rate = m.abs() * cp[c];
+            let side = geometry.boundary[slot as usize].side as usize;
+            match (m > 0.0, &model.sides[side]) {
+                // Outflow at the cell temperature.
+                (true, _) => {
+                    diag[c] += rate;
+                    rhs[c] += rate * t_ref;
+                }
+                (false, SideCondition::Temperature(_)) => {
+                    rhs[c] += rate * (t_bc[side] - t_ref);
+                }
+                // Inflow at the cell temperature.
+                (false, _) => {
+                    diag[c] -= rate;
+                    rhs[c] -= rate * t_ref;
+                }
+            }
+        }
         for (c, d) in diag.iter().enumerate() {
             off.push(Triplet::new(c, c, *d));
         }
-        let matrix =
-            SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &off).map_err(|e| {
-                HeatError::Solver {
-                    message: format!("{e:?}"),
+        let solver = |e: &dyn std::fmt::Debug| HeatError::Solver {
+            message: format!("{e:?}"),
+        };
+        let rhs_mat = faer::MatMut::from_column_major_slice_mut(&mut rhs, n, 1);
+        if advected {
+            // The conduction part as a full (both triangles) matrix plus the advection.
+            for t in &off {
+                if t.row != t.col {
+                    full.push(Triplet::new(t.col, t.row, t.val));
                 }
-            })?;
-        let llt = matrix
-            .sp_cholesky(Side::Lower)
-            .map_err(|e| HeatError::Solver {
-                message: format!("{e:?}"),
-            })?;
-        llt.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut rhs, n, 1));
+            }
+            full.extend_from_slice(&off);
+            let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &full)
+                .map_err(|e| solver(&e))?;
+            let lu = matrix.sp_lu().map_err(|e| solver(&e))?;
+            lu.solve_in_place(rhs_mat);
+        } else {
+            let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &off)
+                .map_err(|e| solver(&e))?;
+            let llt = matrix.sp_cholesky(Side::Lower).map_err(|e| solver(&e))?;
+            llt.solve_in_place(rhs_mat);
+        }
         if let Some(c) = rhs.iter().position(|t| !t.is_finite()) {
             return Err(HeatError::NonFinite {
                 quantity: "temperature",

@@ -38,9 +38,10 @@
 //! - **Time stepping**: [`HeatStepper::step`] advances explicitly (A-Eqs. 39, 50) with equal
 //!   sub-steps under the stability limit min_i C_i / (Σ conductances + 3 Σ outflow ṁ c_p)
 //!   times `stability_safety` (default 0.8), computed each outer step from the mesh, the
-//!   properties and the fluxes. [`HeatStepper::implicit_step`] is a backward-Euler conduction
-//!   step (no advection) on a sparse SPD system solved by `faer`'s sparse Cholesky, with the
-//!   cross-diffusion terms as deferred correction, for long cooling runs.
+//!   properties and the fluxes. [`HeatStepper::implicit_step`] is a backward-Euler
+//!   step on a sparse system (conduction alone: SPD, `faer`'s sparse Cholesky; with mass
+//!   fluxes: first-order upwind advection, sparse LU), with the cross-diffusion terms as
+//!   deferred correction, for long runs.
 //!
 //! - **Mesh-derived coefficients** live in a [`HeatGeometry`] the caller keeps: the topology
 //!   part (face classes, boundary table, least-squares stencils, cell → channel adjacency) is

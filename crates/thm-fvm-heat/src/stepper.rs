@@ -124,7 +124,7 @@ pub struct HeatStepper {
     // Per cell.
     pub(crate) capacity: Vec<f64>,
     pub(crate) conductivity: Vec<f64>,
-    specific_heat: Vec<f64>,
+    pub(crate) specific_heat: Vec<f64>,
     exchange: Vec<ExchangeFactors>,
     pub(crate) gradient: Vec<[f64; 2]>,
     limiter: Vec<f64>,

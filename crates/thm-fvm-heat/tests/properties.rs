@@ -163,6 +163,51 @@ proptest! {
         prop_assert!((e2 - e0).abs() <= 1e-11 * scale, "implicit dE = {} J of {} J", e2 - e0, scale);
     }
 
+    /// Backward Euler with advection by arbitrary channel mass fluxes (closed, adiabatic):
+    /// every advected transfer leaves one row as it enters another, so Σ C_i T_i is unchanged
+    /// up to round-off, for a step far beyond the explicit limit.
+    #[test]
+    fn implicit_step_with_advection_conserves_energy(seed in any::<u64>(), nx in 2usize..7, ny in 2usize..7) {
+        let (mesh, model, input, mut state) = setup(seed, nx, ny, 2e-4);
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
+        let mut stepper = HeatStepper::new();
+        let limit = stepper.stable_time_step(&model, &geometry, &mesh, &input, &state).unwrap();
+        let (e0, scale) = energy(&stepper, &state.temperature);
+        stepper.implicit_step(&model, &geometry, &mesh, &input, &mut state, 100.0 * limit).unwrap();
+        let (e1, _) = energy(&stepper, &state.temperature);
+        prop_assert!((e1 - e0).abs() <= 1e-11 * scale, "dE = {} J of {} J", e1 - e0, scale);
+    }
+
+    /// Implicit pure advection (λ = 0, uniform single-phase fluid, divergence-free fluxes):
+    /// the first-order upwind matrix is an M-matrix with zero row sums, so each new
+    /// temperature is a convex combination of old ones: no new extrema, for any step.
+    #[test]
+    fn implicit_pure_advection_creates_no_new_extrema(seed in any::<u64>(), nx in 2usize..7, ny in 2usize..7) {
+        let mesh = random_mesh(seed, nx, ny);
+        let mut params = table1_params();
+        params.liquid.conductivity = 0.0;
+        let model = HeatModel::new(&params, &mesh).unwrap();
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
+        let mut input = random_input(seed, &mesh, 2e-4);
+        input.liquid_fraction.iter_mut().for_each(|a| *a = 1.0);
+        input.liquid_density.iter_mut().for_each(|r| *r = 1000.0);
+        let mut state = HeatState {
+            time: 0.0,
+            steps: 0,
+            temperature: random_temperatures(seed, mesh.n_cells()),
+        };
+        let fluid: Vec<usize> = (0..mesh.n_cells()).filter(|&c| mesh.cell_kind[c].is_fluid()).collect();
+        let range = |t: &[f64]| fluid.iter().fold((f64::MAX, f64::MIN), |(a, b), &c| (a.min(t[c]), b.max(t[c])));
+        let (lo, hi) = range(&state.temperature);
+        let mut stepper = HeatStepper::new();
+        let limit = stepper.stable_time_step(&model, &geometry, &mesh, &input, &state).unwrap();
+        for _ in 0..3 {
+            stepper.implicit_step(&model, &geometry, &mesh, &input, &mut state, 50.0 * limit).unwrap();
+            let (a, b) = range(&state.temperature);
+            prop_assert!(a >= lo - 1e-9 && b <= hi + 1e-9, "range [{a}, {b}] left [{lo}, {hi}]");
+        }
+    }
+
     /// 1 and 2 rayon threads give identical bits (explicit step with advection).
     #[test]
     fn serial_and_parallel_runs_are_bitwise_equal(seed in any::<u64>(), nx in 2usize..7, ny in 2usize..7) {

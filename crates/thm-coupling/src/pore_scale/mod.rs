@@ -29,11 +29,14 @@
 //!
 //! - the DEM takes `n = ceil(Δt_C / Δt_D)` steps of `Δt_C / n ≤ Δt_D` (Δt_D from the
 //!   parameters, below [`thm_dem::critical_time_step`]);
-//! - the flow sub-cycles under its own stability and positivity limits (`thm-vpn-flow`: the
-//!   Gershgorin bound of the linearised pressure equation and at most half of a phase's mass
-//!   per sub-step);
+//! - the flow either sub-cycles under its own stability and positivity limits
+//!   ([`FlowScheme::Explicit`]; `thm-vpn-flow`: the Gershgorin bound of the linearised
+//!   pressure equation and at most half of a phase's mass per sub-step) or takes linearly
+//!   implicit pressure sub-steps ([`FlowScheme::Implicit`]: one per coupled step unless a
+//!   pore would lose half a phase or the closure rejects it), the choice for water-filled
+//!   pores, whose explicit limit is ~10⁻⁸ s;
 //! - the heat either sub-cycles under its explicit limit ([`HeatScheme::Explicit`]) or takes
-//!   one backward-Euler conduction step ([`HeatScheme::Implicit`]; no advection).
+//!   one backward-Euler step with first-order upwind advection ([`HeatScheme::Implicit`]).
 //!
 //! The fluid forces are held over the DEM steps of one coupled step and the flow and heat
 //! see the skeleton at its end, so Δt_C is the coupling lag; the flow's and heat's own limits
@@ -55,7 +58,9 @@ pub mod stages;
 mod state;
 
 pub use error::CouplingError;
-pub use params::{FlowBoundary, HeatScheme, PoreScaleConfig, PoreScaleParams, Skeleton};
+pub use params::{
+    FlowBoundary, FlowScheme, HeatScheme, PoreScaleConfig, PoreScaleParams, Skeleton,
+};
 pub use state::{
     InitialFluid, PoreScaleState, cell_capacities, circles_of, contact_normal_stress, contacts_of,
 };
@@ -219,6 +224,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             &self.fluid,
             &state.mesh,
             free,
+            self.config.params.flow_scheme,
             &mut state.flow,
             &mut self.dv_dt,
             &mut self.input,

@@ -32,8 +32,23 @@ pub enum HeatScheme {
     /// advection).
     #[default]
     Explicit,
-    /// One backward-Euler conduction step per coupled step (`HeatStepper::implicit_step`).
-    /// Conduction only: a step whose channels or boundaries carried mass is an error.
+    /// One backward-Euler step per coupled step (`HeatStepper::implicit_step`): conduction
+    /// with the deferred cross terms, and first-order upwind advection by the step's mean
+    /// channel and boundary mass rates.
+    Implicit,
+}
+
+/// How the pore pressures are advanced over one coupled step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FlowScheme {
+    /// Explicit sub-steps under the stability and positivity limits of `thm-vpn-flow`
+    /// (~10⁻⁸ s for water-filled pores).
+    #[default]
+    Explicit,
+    /// Linearly implicit pressure sub-steps (`FlowStepper::implicit_step`): one per coupled
+    /// step unless positivity or the closure asks for shorter ones. Mass is conserved to
+    /// round-off either way; the time error is first order in Δt_C.
     Implicit,
 }
 
@@ -73,6 +88,9 @@ pub struct PoreScaleParams {
     pub remesh: RemeshCriteriaParams,
     /// Channel flow (viscosities, sub-step safety factors).
     pub flow: FlowParameters,
+    /// How the pressures are advanced (default explicit).
+    #[serde(default)]
+    pub flow_scheme: FlowScheme,
     /// Fluid boundary conditions by side; sides not listed are impermeable.
     #[serde(default)]
     pub flow_boundaries: Vec<FlowBoundary>,

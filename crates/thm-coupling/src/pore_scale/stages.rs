@@ -13,7 +13,7 @@ use thm_vpn_mesh::{
 };
 
 use super::error::CouplingError;
-use super::params::HeatScheme;
+use super::params::{FlowScheme, HeatScheme};
 use super::state::{circles_of, contact_normal_stress, contacts_of, fluid_capacity};
 
 /// Stage 1 (A-Eqs. 52–54): the fluid forces on the spheres from the pore pressures and the
@@ -132,6 +132,7 @@ pub fn flow_stage(
     fluid: &impl PoreFluid,
     mesh: &PackingMesh,
     moving: bool,
+    scheme: FlowScheme,
     flow: &mut FlowState,
     dv_dt: &mut Vec<f64>,
     input: &mut FlowInput,
@@ -147,9 +148,11 @@ pub fn flow_stage(
                 .map(|(&c, &v)| (mesh.mesh.cell_volume(c as usize) - v) / dt),
         );
     }
-    let report = stepper
-        .step(network, flow, fluid, dv_dt, dt)
-        .map_err(CouplingError::Flow)?;
+    let report = match scheme {
+        FlowScheme::Explicit => stepper.step(network, flow, fluid, dv_dt, dt),
+        FlowScheme::Implicit => stepper.implicit_step(network, flow, fluid, dv_dt, dt),
+    }
+    .map_err(CouplingError::Flow)?;
     check_flow(flow)?;
     let m = &mesh.mesh;
     let nc = m.n_cells();
