@@ -1,26 +1,27 @@
-//! The linearly implicit pressure step ([`FlowStepper::implicit_step`]).
+//! The implicit pressure step ([`FlowStepper::implicit_step`]): backward Euler in the phase
+//! masses, solved by Newton iterations on the pore closure.
 //!
 //! The explicit update is limited by the compressibility of the pore fluid: for water-filled
-//! pores `K/V Σ C` is so large that the stable sub-step is ~10⁻⁸ s. The implicit step removes
-//! that limit by solving the linearised pressure equation of every pore at the end of the
-//! sub-step,
+//! pores `K/V Σ C` is so large that the stable sub-step is ~10⁻⁸ s. A sub-step of length `h`
+//! here seeks the masses `m^{n+1} = m^n + h F(P^{n+1})` whose closure (A-Eq. 29) gives the
+//! pressures `P^{n+1}` that drive the fluxes `F` (A-Eqs. 10–15, 24). Each iteration
+//! linearises the closure about the current iterate `(m, P)`,
 //!
 //! ```text
-//! V_i/K_i (P_i* − P_i)/h = Σ_c C_c (P_j* − P_i*) + Σ_links C_l (P_b − P_i*) + S_i − dV_i/dt
+//! V_i/K_i (P_i* − P_i)/h = d_i/h + Σ_c C'_c (P_j* − P_i*) + Σ_links C'_l (P_b − P_i*) + S_i
 //! ```
 //!
-//! (`C` the volumetric conductances of the channels and pressure links at the upwind
-//! fractions, each phase's weighted by its upwind density over its density in pore `i` (the
-//! volume the transported mass takes up there), `S_i` the volume rate of the prescribed mass
-//! rates at the pore's densities, `K_i` the mixture bulk modulus), a sparse system solved by
-//! LU. The density ratios make its fixed point the state where every pore's mass balances
-//! (a steady flow between reservoirs at different pressures), not only its volume. It is the volume balance `Σ_k dm_k/ρ_k − V/K dP = dV` of A-Eqs. 24–29
-//! linearised about the current state. The phase mass fluxes are then evaluated at `P*` with
-//! the same channel law as the explicit step (A-Eqs. 10–15, upwind at `P*`), the masses are
-//! advanced conservatively (A-Eq. 24) and closed (A-Eq. 29): the closure, not the linear
-//! solve, sets the new pressure, so mass is conserved to round-off whatever the
-//! linearisation error. A sub-step in which a pore would lose more than
-//! `positivity_safety` of a phase's mass is rejected and halved.
+//! with `d_i = Σ_k (m_k^n − m_k)/ρ_k − (V^{n+1} − V)` the volume the iterate lacks (at the
+//! first iterate `−h dV/dt`), `C'` each phase's conductance at the upwind fraction times its
+//! upwind density over its density in pore `i` (the volume the transported mass takes up
+//! there), `S_i` the volume rate of the prescribed mass rates and `K_i` the mixture bulk
+//! modulus; a sparse system solved by LU. The phase mass fluxes at `P*` (same channel law
+//! and upwinding as the explicit step) then give the next iterate `m = m^n + h F(P*)`,
+//! closed. The iterations stop when the closure pressures agree with `P*` to 10⁻⁹ of the
+//! largest pressure and no channel changed its upwind end; mass is conserved to round-off
+//! at every iterate, so the tolerance affects accuracy only. A sub-step that would take more
+//! than `positivity_safety` of a phase out of a pore, whose closure fails, or that does not
+//! converge in 12 iterations is halved.
 
 use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
@@ -31,26 +32,42 @@ use crate::fluid::PoreFluid;
 use crate::network::{BoundaryCondition, Network};
 use crate::state::FlowState;
 use crate::stepper::{
-    FlowStepper, StepReport, advance_and_close, boundary_fluxes, channel_fluxes, gather_pore_rates,
+    FlowStepper, StepReport, SubstepLimit, advance_and_close, boundary_fluxes, channel_fluxes,
+    gather_pore_rates,
 };
 
-/// Re-solves of one sub-step when the flow direction of a channel or link changed.
-const MAX_UPWIND_ITERATIONS: usize = 8;
+/// Newton iterations of one sub-step before it is halved.
+const MAX_NEWTON_ITERATIONS: usize = 12;
+/// Largest |P_closure − P*| of a converged sub-step, relative to the largest |P| (at least
+/// [`ATMOSPHERIC_PRESSURE`]).
+const NEWTON_TOLERANCE: f64 = 1e-9;
+/// Pressure scale floor of the convergence test \[Pa\].
+const ATMOSPHERIC_PRESSURE: f64 = 101_325.0;
+
+/// Buffers of the Newton iterations of one sub-step.
+struct NewtonScratch {
+    /// The state at the start of the sub-step.
+    start: FlowState,
+    /// Per pore: the volume the iterate lacks (see [`FlowStepper::newton_substep`]).
+    defect: Vec<f64>,
+}
 
 /// Whether every channel and pressure link has the same upwind end under pressures `a` and
-/// `b` (the tie rule of the explicit fluxes: `P_i ≥ P_j` → `i`).
-fn same_directions(network: &Network, a: &[f64], b: &[f64]) -> bool {
+/// `b` (the tie rule of the explicit fluxes: `P_i ≥ P_j` → `i`), ignoring those whose drive
+/// under `b` is within `tolerance` \[Pa\] of zero (their flux is round-off either way).
+fn same_directions(network: &Network, a: &[f64], b: &[f64], tolerance: f64) -> bool {
     let parts = network.parts();
+    let agree = |a0: f64, a1: f64, b0: f64, b1: f64| {
+        (a0 >= a1) == (b0 >= b1) || (b0 - b1).abs() <= tolerance
+    };
     let channels = parts.channel_pores.iter().all(|&[i, j]| {
         let (i, j) = (i as usize, j as usize);
-        (a[i] >= a[j]) == (b[i] >= b[j])
+        agree(a[i], a[j], b[i], b[j])
     });
     let links = (0..network.n_links()).all(|k| {
         let p = parts.link_pore[k] as usize;
         match parts.boundaries[parts.link_group[k] as usize] {
-            BoundaryCondition::Pressure { pressure, .. } => {
-                (pressure >= a[p]) == (pressure >= b[p])
-            }
+            BoundaryCondition::Pressure { pressure, .. } => agree(pressure, a[p], pressure, b[p]),
             _ => true,
         }
     });
@@ -58,9 +75,8 @@ fn same_directions(network: &Network, a: &[f64], b: &[f64]) -> bool {
 }
 
 impl FlowStepper {
-    /// Advances `state` by `dt` \[s\] with linearly implicit pressure sub-steps (see the
-    /// module doc): one sub-step of `dt` unless a pore would lose more than
-    /// `positivity_safety` of a phase's mass, then halved until it does not (at most
+    /// Advances `state` by `dt` \[s\] with backward-Euler sub-steps (see the module doc): one
+    /// sub-step of `dt` unless it is rejected, then halved until it is accepted (at most
     /// `max_substeps` tries in all). `dv_dt` as in [`Self::step`]. The report's
     /// `smallest_substep` is the shortest accepted sub-step.
     pub fn implicit_step(
@@ -92,13 +108,13 @@ impl FlowStepper {
             boundary_gas_rate: vec![0.0; ng],
         };
         let max_tries = self.config.parameters().max_substeps;
-        let s_pos = self.config.parameters().positivity_safety;
         let mut tries = 0u32;
         let mut remaining = dt;
         let mut h = dt;
-        let mut p_old = Vec::with_capacity(network.n_pores());
-        let mut upwind_pressure = Vec::with_capacity(network.n_pores());
-        let mut backup = state.clone();
+        let mut scratch = NewtonScratch {
+            start: state.clone(),
+            defect: Vec::with_capacity(network.n_pores()),
+        };
         while remaining > 0.0 {
             h = h.min(remaining);
             if tries >= max_tries {
@@ -111,55 +127,21 @@ impl FlowStepper {
                 });
             }
             tries += 1;
-            // Upwind directions from the current pressures; re-solved with those of P* until
-            // the channels the matrix saw are the ones the fluxes will use.
-            upwind_pressure.clear();
-            upwind_pressure.extend_from_slice(&state.pressure);
-            let mut p_star = self.solve_pressure(network, state, &upwind_pressure, dv_dt, h)?;
-            for _ in 0..MAX_UPWIND_ITERATIONS {
-                if same_directions(network, &upwind_pressure, &p_star) {
-                    break;
-                }
-                upwind_pressure.copy_from_slice(&p_star);
-                p_star = self.solve_pressure(network, state, &upwind_pressure, dv_dt, h)?;
-            }
-            p_old.clear();
-            p_old.extend_from_slice(&state.pressure);
-            state.pressure.copy_from_slice(&p_star);
-            channel_fluxes(network, state, &self.config, &mut self.channel);
-            boundary_fluxes(network, state, &self.config, &self.inflow, &mut self.link);
-            let gathered = gather_pore_rates(
+            match self.newton_substep(
                 network,
                 state,
-                &self.config,
-                &self.channel,
-                &self.link,
-                &mut self.rates,
+                fluid,
+                dv_dt,
+                h,
+                &mut scratch,
                 report.substeps,
-            );
-            state.pressure.copy_from_slice(&p_old);
-            let limit = gathered?;
-            let too_much = self.rates.iter().enumerate().any(|(p, r)| {
-                (r.liquid < 0.0 && -r.liquid * h > s_pos * state.liquid_mass[p])
-                    || (r.gas < 0.0 && -r.gas * h > s_pos * state.gas_mass[p])
-            });
-            if too_much {
-                h *= 0.5;
-                continue;
-            }
-            // A closure the linearisation overshot (e.g. a liquid pore pulled below zero
-            // pressure) rejects the sub-step too.
-            backup.clone_from(state);
-            match advance_and_close(state, fluid, &self.rates, dv_dt, h, report.substeps) {
-                Ok(()) => {}
-                Err(FlowError::Closure { .. }) => {
-                    state.clone_from(&backup);
+            )? {
+                Some(limit) => report.max_reynolds = report.max_reynolds.max(limit.max_reynolds),
+                None => {
                     h *= 0.5;
                     continue;
                 }
-                Err(e) => return Err(e),
             }
-            report.max_reynolds = report.max_reynolds.max(limit.max_reynolds);
             report.boundary_liquid_rate.fill(0.0);
             report.boundary_gas_rate.fill(0.0);
             for (k, f) in self.link.iter().enumerate() {
@@ -186,6 +168,96 @@ impl FlowStepper {
         Ok(report)
     }
 
+    /// One backward-Euler sub-step of length `h` by Newton iterations on the closure (module
+    /// doc). On success `state` holds the closed end state, the stepper's channel, link and
+    /// pore rates are those that took it there, and the result is their flux diagnostics;
+    /// `None` (with `state` restored) asks for a shorter sub-step: a pore would lose more
+    /// than `positivity_safety` of a phase, a closure failed, or the iterations did not
+    /// converge.
+    #[allow(clippy::too_many_arguments)]
+    fn newton_substep(
+        &mut self,
+        network: &Network,
+        state: &mut FlowState,
+        fluid: &impl PoreFluid,
+        dv_dt: &[f64],
+        h: f64,
+        scratch: &mut NewtonScratch,
+        substep: u32,
+    ) -> Result<Option<SubstepLimit>, FlowError> {
+        let s_pos = self.config.parameters().positivity_safety;
+        scratch.start.clone_from(state);
+        let mut upwind = state.pressure.clone();
+        for _ in 0..MAX_NEWTON_ITERATIONS {
+            // Volume the iterate lacks: Σ_k (m_k^n − m_k)/ρ_k − (V^{n+1} − V), so that the
+            // linearisation is about the iterate but the balance is from the sub-step start.
+            let start = &scratch.start;
+            scratch.defect.clear();
+            scratch.defect.extend((0..network.n_pores()).map(|i| {
+                let phase =
+                    |m0: f64, m: f64, rho: f64| if rho > 0.0 { (m0 - m) / rho } else { 0.0 };
+                let v_end = start.volume[i] + dv_dt.get(i).map_or(0.0, |dv| dv * h);
+                phase(
+                    start.liquid_mass[i],
+                    state.liquid_mass[i],
+                    state.liquid_density[i],
+                ) + phase(start.gas_mass[i], state.gas_mass[i], state.gas_density[i])
+                    - (v_end - state.volume[i])
+            }));
+            let p_star = self.solve_pressure(network, state, &upwind, &scratch.defect, h)?;
+            // Fluxes at P* with the iterate's fractions and densities.
+            let p_iterate = std::mem::replace(&mut state.pressure, p_star);
+            channel_fluxes(network, state, &self.config, &mut self.channel);
+            boundary_fluxes(network, state, &self.config, &self.inflow, &mut self.link);
+            let gathered = gather_pore_rates(
+                network,
+                state,
+                &self.config,
+                &self.channel,
+                &self.link,
+                &mut self.rates,
+                substep,
+            );
+            let p_star = std::mem::replace(&mut state.pressure, p_iterate);
+            let limit = gathered?;
+            let start = &scratch.start;
+            let too_much = self.rates.iter().enumerate().any(|(p, r)| {
+                (r.liquid < 0.0 && -r.liquid * h > s_pos * start.liquid_mass[p])
+                    || (r.gas < 0.0 && -r.gas * h > s_pos * start.gas_mass[p])
+            });
+            if too_much {
+                state.clone_from(&scratch.start);
+                return Ok(None);
+            }
+            state.clone_from(&scratch.start);
+            match advance_and_close(state, fluid, &self.rates, dv_dt, h, substep) {
+                Ok(()) => {}
+                Err(FlowError::Closure { .. }) => {
+                    state.clone_from(&scratch.start);
+                    return Ok(None);
+                }
+                Err(e) => return Err(e),
+            }
+            // Converged when the closure agrees with the linear solve and the flow
+            // directions it was assembled with are those of P*.
+            let scale = state
+                .pressure
+                .iter()
+                .fold(ATMOSPHERIC_PRESSURE, |a, p| a.max(p.abs()));
+            let agree = state
+                .pressure
+                .iter()
+                .zip(&p_star)
+                .all(|(p, q)| (p - q).abs() <= NEWTON_TOLERANCE * scale);
+            if agree && same_directions(network, &upwind, &p_star, NEWTON_TOLERANCE * scale) {
+                return Ok(Some(limit));
+            }
+            upwind = p_star;
+        }
+        state.clone_from(&scratch.start);
+        Ok(None)
+    }
+
     /// The pressures `P*` of the linearised pressure equation over a sub-step `h` (module
     /// doc), from the current (closed) state, with channels and links upwinded by
     /// `upwind_pressure`.
@@ -194,7 +266,7 @@ impl FlowStepper {
         network: &Network,
         state: &FlowState,
         upwind_pressure: &[f64],
-        dv_dt: &[f64],
+        defect: &[f64],
         h: f64,
     ) -> Result<Vec<f64>, FlowError> {
         let parts = network.parts();
@@ -222,10 +294,8 @@ impl FlowStepper {
             .zip(&state.pressure)
             .map(|(d, p)| d * p)
             .collect();
-        if !dv_dt.is_empty() {
-            for (r, dv) in rhs.iter_mut().zip(dv_dt) {
-                *r -= dv;
-            }
+        for (r, d) in rhs.iter_mut().zip(defect) {
+            *r += d / h;
         }
         let mut entries: Vec<Triplet<usize, usize, f64>> =
             Vec::with_capacity(n + 2 * network.n_channels());

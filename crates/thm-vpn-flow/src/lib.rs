@@ -31,16 +31,16 @@
 //!
 //!   The outer step is split into equal sub-steps below the limit (recomputed every
 //!   sub-step); more than `max_substeps` is an error.
-//! - **Linearly implicit pressure step** ([`FlowStepper::implicit_step`]) for water-filled
-//!   pores, where the explicit bound is ~10⁻⁸ s: each sub-step solves the pressure equation
-//!   `V/K (P* − P)/h = Σ C' (P_j* − P_i*) + S − dV/dt` linearised about the current state
-//!   (`C'` each phase's conductance times its upwind-over-local density ratio, so that the
-//!   fixed point balances mass), by sparse LU, with the upwind ends re-chosen from `P*`
-//!   until they agree; the phase mass fluxes at `P*` then advance the masses exactly as the
-//!   explicit stage 4 does and the closure sets the pressure. Mass is conserved to
-//!   round-off for any step; a sub-step that would empty more than `positivity_safety` of a
-//!   phase or that the closure rejects is halved. Backward Euler: first order in time
-//!   (measured against the explicit step on a water/air chain, order 0.8–1.3).
+//! - **Implicit pressure step** ([`FlowStepper::implicit_step`]) for water-filled pores,
+//!   where the explicit bound is ~10⁻⁸ s: backward Euler in the phase masses, each sub-step
+//!   solved by Newton iterations that linearise the closure about the iterate (the pressure
+//!   equation `V/K (P* − P)/h = d/h + Σ C' (P_j* − P_i*) + S`, `C'` each phase's conductance
+//!   times its upwind-over-local density ratio, sparse LU), evaluate the phase fluxes at `P*`
+//!   with the explicit step's channel law and advance the masses from the sub-step start.
+//!   Mass is conserved to round-off at every iterate and for any step; a sub-step that would
+//!   empty more than `positivity_safety` of a phase, whose closure fails or that does not
+//!   converge is halved. First order in time (measured against the explicit step on a
+//!   water/air chain, order 0.8–1.3).
 //! - **Boundary conditions** on boundary faces of fluid cells, per side ([`BoundaryCondition`]):
 //!   prescribed pressure (a reservoir reached through a half-channel from the cell centroid to
 //!   the face centre, aperture `γ e sin ω` as A-Eq. 9; fluid that enters has the reservoir's

@@ -107,11 +107,11 @@ fn water_pores_relax_monotonically_with_steps_far_beyond_the_explicit_limit() {
             .unwrap();
         assert_eq!(r.substeps, 1);
         let gap = state.pressure[0] - state.pressure[1];
-        // Backward Euler on the linearised relaxation lands on the common pressure in one
-        // step; the closure then adds the linearisation error (the transported density is
-        // the upwind pore's, K varies with P), a small fraction of the first gap.
+        // Backward Euler with a step 2000 times the relaxation time lands on the common
+        // pressure (gap/(1 + h/τ) ≈ 2 kPa after the first step, then far less), and the
+        // Newton iterations make the closure agree with it to 1e-9 of P.
         assert!(
-            (gap.abs() < last_gap.abs() || gap.abs() < 1e-6) && gap.abs() <= 1e-3 * 4e6,
+            gap.abs() <= 1e-3 * last_gap.abs() || gap.abs() < 1e-2,
             "gap {gap} after {last_gap}"
         );
         last_gap = gap;
@@ -194,7 +194,7 @@ fn long_implicit_steps_reach_the_steady_state_between_two_reservoirs() {
 
 #[test]
 fn implicit_runs_on_1_and_2_threads_give_identical_bits() {
-    let (net, state0) = random_closed_network(11, 3000);
+    let (net, state0) = random_closed_network(11, 400);
     let fluid = water_air();
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
