@@ -85,6 +85,7 @@ fn fmt_tol(r: &Row) -> String {
         ErrorKind::Relative => format!("≤ {} rel", fmt_num(r.tolerance)),
         ErrorKind::AtMost => format!("≤ {} (bound)", fmt_num(r.reference)),
         ErrorKind::AtLeast => format!("≥ {} (bound)", fmt_num(r.reference)),
+        ErrorKind::Reported => "reported (paper figure)".to_string(),
     }
 }
 

@@ -25,6 +25,11 @@ pub enum ErrorKind {
     AtMost,
     /// The measured value must be at least the reference (a lower bound); error = measured.
     AtLeast,
+    /// A paper figure that cannot be a check (the paper leaves a parameter unstated or the
+    /// setups differ): shown next to the paper's value with the signed difference
+    /// `measured − reference` as error; passes whenever the measured value is finite. The
+    /// case's notes say why it is not a check.
+    Reported,
 }
 
 /// One line of the verification table.
@@ -126,6 +131,27 @@ impl Row {
             tolerance: bound,
             kind: ErrorKind::AtLeast,
             pass: measured.is_finite() && measured >= bound,
+        }
+    }
+}
+
+impl Row {
+    /// A reported comparison with a paper figure (see [`ErrorKind::Reported`]).
+    pub fn reported(
+        quantity: impl Into<String>,
+        unit: impl Into<String>,
+        measured: f64,
+        reference: f64,
+    ) -> Self {
+        Self {
+            quantity: quantity.into(),
+            unit: unit.into(),
+            measured,
+            reference,
+            error: measured - reference,
+            tolerance: f64::NAN,
+            kind: ErrorKind::Reported,
+            pass: measured.is_finite(),
         }
     }
 }

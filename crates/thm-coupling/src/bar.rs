@@ -1,0 +1,224 @@
+//! The bonded bar of Krzaczek et al. (2023), A-Fig. 8, and the coupled fluid–heat cases run
+//! on it: the cooling bar (A-Sect. 4, A-Fig. 11), the advection bar (A-Sect. 5, A-Fig. 14)
+//! and the thermal contraction test with every sphere held (A-Sect. 6 case b, A-Fig. 18).
+//!
+//! The packing is `thm-vpn-mesh`'s seeded 20 × 80 mm bar of 4–8 mm circles at about 10 %
+//! porosity; every overlapping pair is bonded. The figures with the boundary conditions
+//! (A-Figs. 11, 14, 18) are missing from the text; what the text says and how it is read:
+//!
+//! - **Cooling bar** (A-Sect. 4): single-phase water, cooled by 30 K (323.16 K → ends at
+//!   293.16 K), sides adiabatic. The water density after 400 s spans 1000.02–1014.28 kg/m³,
+//!   the Peng–Robinson range between those temperatures at about atmospheric pressure, so
+//!   the pressure is held: both ends are water reservoirs at 0.1 MPa (the Darcy test's top
+//!   pressure, A-Sect. 3.2) and 293.16 K; the water that replaces the contraction enters
+//!   through them.
+//! - **Advection bar** (A-Sect. 5): the same with `ΔP` between the ends, bottom at
+//!   0.1 MPa + ΔP, top at 0.1 MPa (ΔP = 0.9 and 9.9 MPa); water enters at the bottom at
+//!   293.16 K.
+//! - **Case b** (A-Sect. 6): 80 % water / 20 % air at 100 kPa, 368.16 K, both ends at
+//!   278.16 K, closed ends ("to eliminate advection at the start"), solid λ = 420 W/(m K),
+//!   fluid λ × 10, α_exp = 8.3·10⁻⁴ 1/K, every sphere held, 17 s.
+//!
+//! Sides are impermeable and adiabatic in all cases. The S2S apertures are those of contacts
+//! at rest (the skeleton is held, so no contact carries stress: `h = β h₀`, as in the Darcy
+//! test of `thm-vpn-flow`).
+
+use serde::{Deserialize, Serialize};
+use thm_dem::packing::Packing;
+use thm_dem::{CohesiveFrictionalParams, DemState, Kinematics, StepperParams, Vec3};
+use thm_fvm_heat::{
+    BoundaryCondition as HeatBoundary, BoundaryParams, CrossDiffusion, HeatParams,
+    TemperatureSchedule,
+};
+use thm_vpn_flow::{BoundaryCondition as FlowCondition, FlowParameters};
+use thm_vpn_mesh::mesher::overlapping_pairs;
+use thm_vpn_mesh::packing::{PackingSpec, random_packing};
+use thm_vpn_mesh::{BoundarySide, MeshParams, Outline, RemeshCriteriaParams};
+
+use crate::pore_scale::{
+    CouplingError, FlowBoundary, FlowScheme, HeatScheme, InitialFluid, PoreScaleConfig,
+    PoreScaleParams, PoreScaleState, Skeleton,
+};
+
+/// Width of the bar (x) \[m\].
+pub const BAR_WIDTH: f64 = 0.020;
+/// Length of the bar (y) \[m\].
+pub const BAR_LENGTH: f64 = 0.080;
+/// Density of the solid (A-Table 1) \[kg/m³\].
+pub const SOLID_DENSITY: f64 = 2600.0;
+/// Pressure of the water reservoirs at the top (and, in A-Sect. 4, the bottom) \[Pa\].
+pub const TOP_PRESSURE: f64 = 1e5;
+
+/// Which of the paper's bar cases.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "case", rename_all = "snake_case", deny_unknown_fields)]
+pub enum BarCase {
+    /// A-Sect. 4: single-phase water, 323.16 K, ends at 293.16 K, both ends at 0.1 MPa.
+    Cooling,
+    /// A-Sect. 5: as [`BarCase::Cooling`] with the bottom at 0.1 MPa + `pressure_drop`.
+    Advection {
+        /// Pressure difference bottom − top \[Pa\] (paper: 0.9 MPa and 9.9 MPa).
+        pressure_drop: f64,
+    },
+    /// A-Sect. 6 case b: 80 % water / 20 % air at 100 kPa, 368.16 K, ends at 278.16 K, closed.
+    ContractionFixed,
+}
+
+impl BarCase {
+    /// Initial temperature \[K\].
+    pub fn initial_temperature(self) -> f64 {
+        match self {
+            BarCase::Cooling | BarCase::Advection { .. } => 323.16,
+            BarCase::ContractionFixed => 368.16,
+        }
+    }
+
+    /// Temperature held at both ends \[K\].
+    pub fn end_temperature(self) -> f64 {
+        match self {
+            BarCase::Cooling | BarCase::Advection { .. } => 293.16,
+            BarCase::ContractionFixed => 278.16,
+        }
+    }
+
+    /// The initial pore fluid.
+    pub fn initial_fluid(self) -> InitialFluid {
+        match self {
+            BarCase::Cooling | BarCase::Advection { .. } => InitialFluid {
+                pressure: TOP_PRESSURE,
+                liquid_fraction: 1.0,
+            },
+            BarCase::ContractionFixed => InitialFluid {
+                pressure: 1e5,
+                liquid_fraction: 0.8,
+            },
+        }
+    }
+}
+
+/// The bar packing as a DEM state: `thm-vpn-mesh`'s seeded A-Fig. 8 bar, spheres in the
+/// plane, density 2600 kg/m³, every overlapping pair bonded at its current overlap.
+pub fn bar_packing(seed: u64, temperature: f64) -> Result<DemState, CouplingError> {
+    let circles = random_packing(&PackingSpec::paper_bar(seed));
+    let bonds = overlapping_pairs(&circles)
+        .into_iter()
+        .map(|[a, b]| (a.min(b) as usize, a.max(b) as usize))
+        .collect::<std::collections::BTreeSet<_>>()
+        .into_iter()
+        .collect();
+    Packing {
+        kinematics: Kinematics::SpheresInPlane,
+        centres: circles
+            .iter()
+            .map(|c| Vec3::new(c.centre[0], c.centre[1], 0.0))
+            .collect(),
+        radii: circles.iter().map(|c| c.radius).collect(),
+        bonds,
+    }
+    .to_state(SOLID_DENSITY, temperature)
+    .map_err(CouplingError::Dem)
+}
+
+/// The parameters of `case` on the bar meshed with `segments` points per circle: fixed
+/// skeleton, implicit pressure and heat steps, A-Table 1 properties (A-Sect. 6's for case
+/// b), limited cross diffusion (ratio 1; see `thm_fvm_heat::CrossDiffusion`).
+pub fn bar_params(case: BarCase, segments: u32) -> PoreScaleParams {
+    let end = case.end_temperature();
+    let mut heat = HeatParams::paper_a_table_1();
+    heat.boundaries = [BoundarySide::Bottom, BoundarySide::Top]
+        .into_iter()
+        .map(|side| BoundaryParams {
+            side,
+            condition: HeatBoundary::Temperature {
+                temperature: TemperatureSchedule::Constant(end),
+            },
+        })
+        .collect();
+    heat.cross_diffusion = CrossDiffusion::Limited { ratio: 1.0 };
+    let mut thermal_expansion = 8e-6;
+    let reservoir = |pressure| FlowCondition::Pressure {
+        pressure,
+        temperature: end,
+        entering_liquid_fraction: 1.0,
+    };
+    let flow_boundaries = match case {
+        BarCase::Cooling => vec![
+            FlowBoundary {
+                side: BoundarySide::Bottom,
+                condition: reservoir(TOP_PRESSURE),
+            },
+            FlowBoundary {
+                side: BoundarySide::Top,
+                condition: reservoir(TOP_PRESSURE),
+            },
+        ],
+        BarCase::Advection { pressure_drop } => vec![
+            FlowBoundary {
+                side: BoundarySide::Bottom,
+                condition: reservoir(TOP_PRESSURE + pressure_drop),
+            },
+            FlowBoundary {
+                side: BoundarySide::Top,
+                condition: reservoir(TOP_PRESSURE),
+            },
+        ],
+        BarCase::ContractionFixed => {
+            heat.solid.conductivity = 420.0;
+            heat.liquid.conductivity *= 10.0;
+            heat.gas.conductivity *= 10.0;
+            thermal_expansion = 8.3e-4;
+            Vec::new()
+        }
+    };
+    PoreScaleParams {
+        skeleton: Skeleton::Fixed,
+        dem: StepperParams {
+            time_step: 2e-7,
+            damping: 0.08,
+            gravity: [0.0; 3],
+            verlet_skin: 2e-4,
+        },
+        contact: CohesiveFrictionalParams::paper_a_table_1(),
+        thermal_expansion,
+        mesh: MeshParams::new(
+            Outline::Box {
+                min: [0.0, 0.0],
+                max: [BAR_WIDTH, BAR_LENGTH],
+            },
+            segments,
+        ),
+        remesh: RemeshCriteriaParams::default(),
+        flow: FlowParameters::default(),
+        flow_scheme: FlowScheme::Implicit,
+        flow_boundaries,
+        boundary_reduction_factor: 0.0115,
+        heat,
+        heat_scheme: HeatScheme::Implicit,
+    }
+}
+
+/// The initial state of `case` on `config` (built from [`bar_params`] or a variant of it):
+/// the packing of `seed`, uniform fluid and temperature.
+pub fn bar_state(
+    case: BarCase,
+    config: &PoreScaleConfig,
+    seed: u64,
+    fluid: &impl thm_vpn_flow::PoreFluid,
+) -> Result<PoreScaleState, CouplingError> {
+    let t0 = case.initial_temperature();
+    let dem = bar_packing(seed, t0)?;
+    PoreScaleState::new(config, dem, fluid, case.initial_fluid(), |_| t0)
+}
+
+/// Cells crossed by the vertical centreline x = W/2.
+pub fn centreline_cells(mesh: &thm_vpn_mesh::PoreMesh) -> Vec<usize> {
+    let xc = 0.5 * BAR_WIDTH;
+    (0..mesh.n_cells())
+        .filter(|&c| {
+            let xs = mesh.cell_vertices[c].map(|v| mesh.vertices[v as usize][0]);
+            let lo = xs.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            lo <= xc && xc <= hi
+        })
+        .collect()
+}

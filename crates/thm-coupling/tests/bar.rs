@@ -1,0 +1,102 @@
+//! The bar cases of A-Sects. 4–6 on the A-Fig. 8 packing: set-up, a few coupled steps of
+//! case b, and the stop with a named pore when single-phase water goes into tension.
+
+use thm_coupling::bar::{BarCase, bar_packing, bar_params, bar_state, centreline_cells};
+use thm_coupling::pore_scale::{CouplingError, PoreScaleStepper};
+use thm_coupling::verification::water_air;
+
+const CASES: [BarCase; 4] = [
+    BarCase::Cooling,
+    BarCase::Advection {
+        pressure_drop: 0.9e6,
+    },
+    BarCase::Advection {
+        pressure_drop: 9.9e6,
+    },
+    BarCase::ContractionFixed,
+];
+
+#[test]
+fn every_case_sets_up_on_the_paper_bar() {
+    let dem = bar_packing(1, 300.0).expect("packing");
+    let n = dem.particles.radius.len();
+    assert!((40..80).contains(&n), "{n} spheres");
+    // Every overlapping pair is bonded: the packing is one bonded body.
+    assert!(
+        dem.contacts.pair.len() >= n,
+        "{} bonds",
+        dem.contacts.pair.len()
+    );
+    for case in CASES {
+        let config = bar_params(case, 16).validate().expect("parameters");
+        let s = bar_state(case, &config, 1, &water_air()).expect("state");
+        let alpha = case.initial_fluid().liquid_fraction;
+        assert!(
+            s.flow
+                .liquid_fraction
+                .iter()
+                .all(|a| (a - alpha).abs() < 1e-9)
+        );
+        assert!(
+            s.heat
+                .temperature
+                .iter()
+                .all(|&t| t == case.initial_temperature())
+        );
+        assert!(!centreline_cells(&s.mesh.mesh).is_empty());
+    }
+}
+
+#[test]
+fn case_b_steps_conserve_both_phases_and_stay_between_the_end_and_initial_temperatures() {
+    let case = BarCase::ContractionFixed;
+    let config = bar_params(case, 16).validate().expect("parameters");
+    let mut s = bar_state(case, &config, 1, &water_air()).expect("state");
+    let mut stepper = PoreScaleStepper::new(config, water_air(), &s).expect("stepper");
+    let (q0, p0) = (s.liquid_mass(), s.gas_mass());
+    for _ in 0..5 {
+        stepper.step(&mut s, 0.1).expect("step");
+    }
+    assert!(((s.liquid_mass() - q0) / q0).abs() < 1e-12);
+    assert!(((s.gas_mass() - p0) / p0).abs() < 1e-12);
+    let (lo, hi) = (case.end_temperature(), case.initial_temperature());
+    for &t in &s.heat.temperature {
+        assert!(t >= lo - 1e-9 && t <= hi + 1e-9, "T = {t} K");
+    }
+    // The ends cooled, the gas cushions the contraction: pressures fell below 100 kPa but
+    // stay positive.
+    assert!(s.heat.temperature.iter().any(|&t| t < hi - 1.0));
+    assert!(s.flow.pressure.iter().all(|&p| p > 0.0 && p < 1e5 + 1.0));
+}
+
+#[test]
+fn single_phase_water_in_sealed_pores_goes_into_tension_and_the_run_stops_naming_the_pore() {
+    // A-Sect. 4 read literally: water only, 0.1 MPa reservoirs at both ends. Pores that the
+    // network does not connect to a reservoir (and those behind near-closed channels) cool at
+    // fixed mass, and water contracts: the closure gives a negative pressure, which stops the
+    // run with the stage, pore and step.
+    let case = BarCase::Cooling;
+    let config = bar_params(case, 32).validate().expect("parameters");
+    let mut s = bar_state(case, &config, 1, &water_air()).expect("state");
+    let mut stepper = PoreScaleStepper::new(config, water_air(), &s).expect("stepper");
+    let mut stopped = None;
+    for _ in 0..5 {
+        if let Err(e) = stepper.step(&mut s, 1.0) {
+            stopped = Some(e);
+            break;
+        }
+    }
+    match stopped {
+        Some(CouplingError::Unphysical {
+            quantity,
+            place,
+            value,
+            ..
+        }) => {
+            assert_eq!(quantity, "pressure");
+            assert_eq!(place, "pore");
+            assert!(value < 0.0);
+        }
+        other => panic!("expected a stop on negative pressure, got {other:?}"),
+    }
+}
