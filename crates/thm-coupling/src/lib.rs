@@ -60,22 +60,26 @@
 //! The bonded bar of A-Fig. 8 and the parameters and initial states of the cooling bar
 //! (A-Sect. 4), the advection bar (A-Sect. 5) and the thermal contraction test with every
 //! sphere held (A-Sect. 6 case b), with how the missing figures (A-Figs. 11, 14, 18) are
-//! read. Case b runs (17 s in 170 coupled steps, about 2 s optimised). Single-phase water
-//! (A-Sects. 4–5) does not: water in the pores that the network leaves sealed contracts at
-//! fixed mass as it cools and the closure gives a negative pressure within the first second,
-//! which stops the run naming the pore.
+//! read. Case b: 17 s in 170 coupled steps, about 2 s optimised; A-Sects. 4–5: 400 s in 400
+//! coupled steps, about 4 s. Water sealed in pores that no channel connects to a reservoir
+//! contracts at fixed mass as it cools and goes into tension; the water cases allow it
+//! (`PoreScaleParams::liquid_tension`), otherwise it stops the run naming the pore.
 //!
 //! ## Status
 //!
-//! In place: the pore-scale step, implicit pressure and heat steps for long runs, the
-//! conservation case and case b. Not yet here: the A-Sects. 4–5 runs (liquid tension, see
-//! above), the paper's coupled scenarios as `thm run` kinds, and the MPM×DEM scheme.
+//! In place: the pore-scale step, implicit pressure and heat steps for long runs, the bar
+//! cases of A-Sects. 4, 5 and 6 case b (also as the `thm run` kind `pore_scale_bar`). Not yet
+//! here: Péclet numbers and pore velocities of A-Sect. 5, the energy balance against the
+//! boundary heat flow, and the MPM×DEM scheme.
 //!
 //! ## Verification ([`verification::cases`])
 //!
 //! - `coupling/pore_scale_closed_conservation`: liquid mass, gas mass and thermal energy of a
 //!   closed, adiabatic bonded packing constant to 10⁻¹² relative, with a free skeleton
 //!   remeshed almost every step and with a fixed skeleton, explicit and implicit.
+//! - `coupling/bar_cooling_advection`: A-Sects. 4–5, the liquid mass against the reservoir
+//!   inflow to 10⁻¹², the time-step rule (halving Δt_C = 1 s moves T_max by < 0.05 K), and the
+//!   paper's 0.52 K, density range and advection differences as reported rows.
 //! - `coupling/bar_contraction_fixed`: A-Sect. 6 case b, phase masses to 10⁻¹², the
 //!   time-step rule (halving Δt_C = 0.1 s moves T_max by < 0.1 K), and the paper's 333.3 K and
 //!   73.0 kPa as reported rows.

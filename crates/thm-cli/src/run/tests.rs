@@ -756,3 +756,112 @@ end_strain = 0.0005
         }
     }
 }
+
+mod pore_scale_bar {
+    use super::*;
+
+    const CASE_B: &str = r#"
+kind = "pore_scale_bar"
+[time]
+step = "0.1 s"
+end = "0.6 s"
+[output]
+frame_every = 2
+checkpoint_every = 2
+encoding = "ascii"
+[bar]
+case = "contraction_fixed"
+segments = 16
+"#;
+
+    #[test]
+    fn resumed_mid_run_is_bitwise_identical() {
+        let dir = scratch("pore_bar");
+        let file = write_scenario(&dir, CASE_B);
+        let full = dir.join("full");
+        let Outcome::Finished { steps, .. } = run(&file, &full, None).unwrap() else {
+            panic!("not finished")
+        };
+        assert_eq!(steps, 6);
+        assert!(full.join("cells.pvd").is_file() && full.join("spheres.pvd").is_file());
+        let resumed = dir.join("resumed");
+        copy_dir(&full, &resumed);
+        std::fs::remove_file(checkpoint_path(&resumed, 6)).unwrap();
+        std::fs::remove_file(resumed.join("cells/cells_00000006.vtu")).unwrap();
+        run(&file, &resumed, Some(&checkpoint_path(&resumed, 2))).unwrap();
+        assert_same_results(&full, &resumed, "cells", &[4, 6], 6);
+        assert_same_results(&full, &resumed, "spheres", &[4, 6], 6);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn bad_fields_name_the_key() {
+        let cases = [
+            (
+                "case = \"contraction_fixed\"",
+                "case = \"advection\"",
+                "bar.pressure_drop: required for case = \"advection\"",
+            ),
+            (
+                "case = \"contraction_fixed\"",
+                "case = \"contraction_fixed\"\npressure_drop = \"1 MPa\"",
+                "bar.pressure_drop: only for case = \"advection\"",
+            ),
+            (
+                "case = \"contraction_fixed\"",
+                "case = \"advection\"\npressure_drop = \"-1 MPa\"",
+                "bar.pressure_drop",
+            ),
+            (
+                "segments = 16",
+                "segments = 4",
+                "bar.segments: must be in 8 … 256, got 4",
+            ),
+            (
+                "case = \"contraction_fixed\"",
+                "case = \"melting\"",
+                "bar.case",
+            ),
+        ];
+        for (k, (from, to, expected)) in cases.iter().enumerate() {
+            assert!(CASE_B.contains(from), "{from}");
+            let err = error_of(&format!("pore_bar_bad_{k}"), &CASE_B.replacen(from, to, 1));
+            assert!(
+                err.contains(expected),
+                "case {k}: `{err}` lacks `{expected}`"
+            );
+        }
+    }
+
+    #[test]
+    fn sealed_water_without_tension_stops_naming_the_pore_and_keeps_its_checkpoint() {
+        let dir = scratch("pore_bar_tension");
+        let text = CASE_B
+            .replace("case = \"contraction_fixed\"", "case = \"cooling\"")
+            .replace("step = \"0.1 s\"", "step = \"1 s\"")
+            .replace("end = \"0.6 s\"", "end = \"20 s\"")
+            .replace("segments = 16", "segments = 32\nliquid_tension = false")
+            .replace("checkpoint_every = 2", "checkpoint_every = 1");
+        let file = write_scenario(&dir, &text);
+        let out = dir.join("out");
+        let err = run(&file, &out, None).unwrap_err();
+        let RunError::Unstable {
+            quantity,
+            place,
+            step,
+            ..
+        } = &err
+        else {
+            panic!("expected an unstable stop, got {err}")
+        };
+        assert_eq!(quantity, "pressure");
+        assert!(place.starts_with("pore "), "{place}");
+        assert!(out.join("history.csv").is_file());
+        // The last completed step's checkpoint is kept.
+        assert!(
+            checkpoint_path(&out, step - 1).is_file(),
+            "step {step}: {err}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

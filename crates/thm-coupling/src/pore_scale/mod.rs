@@ -225,6 +225,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             &state.mesh,
             free,
             self.config.params.flow_scheme,
+            self.config.params.liquid_tension,
             &mut state.flow,
             &mut self.dv_dt,
             &mut self.input,

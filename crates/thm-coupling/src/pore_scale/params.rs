@@ -91,6 +91,12 @@ pub struct PoreScaleParams {
     /// How the pressures are advanced (default explicit).
     #[serde(default)]
     pub flow_scheme: FlowScheme,
+    /// Whether pores that hold only liquid may go into tension (a negative pressure on the
+    /// liquid branch of the EOS; cavitation is not modelled). Default false: any negative
+    /// pressure after the flow stage stops the run. Water sealed in pores that the network
+    /// does not connect to a reservoir contracts at fixed mass when it cools (A-Sects. 4–5).
+    #[serde(default)]
+    pub liquid_tension: bool,
     /// Fluid boundary conditions by side; sides not listed are impermeable.
     #[serde(default)]
     pub flow_boundaries: Vec<FlowBoundary>,

@@ -133,6 +133,7 @@ pub fn flow_stage(
     mesh: &PackingMesh,
     moving: bool,
     scheme: FlowScheme,
+    liquid_tension: bool,
     flow: &mut FlowState,
     dv_dt: &mut Vec<f64>,
     input: &mut FlowInput,
@@ -153,7 +154,11 @@ pub fn flow_stage(
         FlowScheme::Implicit => stepper.implicit_step(network, flow, fluid, dv_dt, dt),
     }
     .map_err(CouplingError::Flow)?;
-    check_flow(flow)?;
+    if liquid_tension {
+        check_flow_with_liquid_tension(flow)?;
+    } else {
+        check_flow(flow)?;
+    }
     let m = &mesh.mesh;
     let nc = m.n_cells();
     input.liquid_fraction.resize(nc, 0.0);
@@ -188,8 +193,43 @@ pub fn flow_stage(
 /// The checks at the flow stage's boundary: finite positive pressure, α_q ∈ [0, 1], finite
 /// non-negative masses.
 pub fn check_flow(flow: &FlowState) -> Result<(), CouplingError> {
+    check_pores(flow, "flow", true)
+}
+
+/// [`check_flow`] where pores that hold only liquid may be in tension (a finite negative
+/// pressure; [`super::PoreScaleParams::liquid_tension`]).
+pub fn check_flow_with_liquid_tension(flow: &FlowState) -> Result<(), CouplingError> {
+    check_pores(flow, "flow", false)?;
+    match (0..flow.n_pores()).find(|&p| flow.pressure[p] <= 0.0 && flow.gas_mass[p] > 0.0) {
+        Some(p) => Err(CouplingError::Unphysical {
+            stage: "flow",
+            quantity: "pressure",
+            place: "pore",
+            index: p,
+            value: flow.pressure[p],
+            step: flow.step,
+            why: "not a positive pressure in a pore that holds gas",
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The checks after a closure at new temperatures or a remap: as [`check_flow`] but a finite
+/// negative pressure passes. A liquid pore cooled at fixed mass contracts and its closure
+/// pressure falls by about K β ΔT (MPa per kelvin for water) before the next flow stage can
+/// bring in the water that replaces the contraction; that flow stage's check then decides
+/// whether the tension is real (a sealed pore) or a lag of the sequential step.
+pub fn check_closed(flow: &FlowState, stage: &'static str) -> Result<(), CouplingError> {
+    check_pores(flow, stage, false)
+}
+
+fn check_pores(
+    flow: &FlowState,
+    stage: &'static str,
+    positive_pressure: bool,
+) -> Result<(), CouplingError> {
     let bad = |quantity, index, value, why| CouplingError::Unphysical {
-        stage: "flow",
+        stage,
         quantity,
         place: "pore",
         index,
@@ -199,8 +239,11 @@ pub fn check_flow(flow: &FlowState) -> Result<(), CouplingError> {
     };
     for p in 0..flow.n_pores() {
         let pr = flow.pressure[p];
-        if !(pr.is_finite() && pr > 0.0) {
-            return Err(bad("pressure", p, pr, "not a finite positive pressure"));
+        if !pr.is_finite() {
+            return Err(bad("pressure", p, pr, "not finite"));
+        }
+        if positive_pressure && pr <= 0.0 {
+            return Err(bad("pressure", p, pr, "not a positive pressure"));
         }
         let a = flow.liquid_fraction[p];
         if !(0.0..=1.0).contains(&a) {
@@ -299,7 +342,7 @@ pub fn heat_stage(
         flow.temperature[p] = heat.temperature[c as usize];
     }
     flow.close(fluid).map_err(CouplingError::Flow)?;
-    check_flow(flow)?;
+    check_closed(flow, "heat")?;
     Ok(substeps)
 }
 
@@ -475,7 +518,7 @@ pub fn remesh(
     flow.time = state.flow.time;
     flow.boundary_liquid_inflow = state.flow.boundary_liquid_inflow.clone();
     flow.boundary_gas_inflow = state.flow.boundary_gas_inflow.clone();
-    check_flow(&flow)?;
+    check_closed(&flow, "remesh")?;
     let heat = HeatState {
         time: state.heat.time,
         steps: state.heat.steps,

@@ -3,6 +3,7 @@
 pub mod dem_uniaxial_tension_bar;
 pub mod lumped_cooling;
 pub mod mpm_semi_infinite_bar;
+pub mod pore_scale_bar;
 
 use std::path::Path;
 
@@ -16,6 +17,7 @@ pub fn names() -> String {
         lumped_cooling::LumpedCooling::KIND,
         mpm_semi_infinite_bar::SemiInfiniteBar::KIND,
         dem_uniaxial_tension_bar::DemTensionBar::KIND,
+        pore_scale_bar::PoreScaleBar::KIND,
     ]
     .iter()
     .map(|k| format!("`{k}`"))
@@ -38,6 +40,9 @@ pub fn dispatch(
         }
         dem_uniaxial_tension_bar::DemTensionBar::KIND => {
             drive::<dem_uniaxial_tension_bar::DemTensionBar>(doc, file, opts)
+        }
+        pore_scale_bar::PoreScaleBar::KIND => {
+            drive::<pore_scale_bar::PoreScaleBar>(doc, file, opts)
         }
         other => Err(RunError::Config {
             path: file.to_path_buf(),

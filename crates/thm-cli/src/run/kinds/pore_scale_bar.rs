@@ -1,0 +1,354 @@
+//! `kind = "pore_scale_bar"`: the coupled DEM–CFD–heat bar cases of Krzaczek et al. (2023)
+//! on `thm_coupling::bar` (A-Fig. 8 packing; A-Sect. 4 cooling, A-Sect. 5 advection, A-Sect. 6
+//! case b). This adapter only reads the file, steps `thm_coupling::pore_scale` and writes
+//! what it sees; the cases themselves (boundary conditions, properties, how the missing
+//! figures are read) live in `thm_coupling::bar`, where a library user reaches them too.
+
+use serde::{Deserialize, Serialize};
+use thm_coupling::bar::{BarCase, bar_params, bar_state, centreline_cells};
+use thm_coupling::pore_scale::{CouplingError, PoreScaleParams, PoreScaleState, PoreScaleStepper};
+use thm_coupling::verification::{WaterAir, water_air};
+use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
+
+use crate::run::config::TimeControl;
+use crate::run::error::{ConfigError, RunError};
+use crate::run::scenario::{FrameSink, Scenario};
+use crate::run::summary::SummaryRow;
+use crate::run::units::{Pressure, Quantity};
+
+/// Which case of the paper.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CaseName {
+    /// A-Sect. 4.
+    Cooling,
+    /// A-Sect. 5 (needs `bar.pressure_drop`).
+    Advection,
+    /// A-Sect. 6 case b.
+    ContractionFixed,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+fn default_segments() -> u32 {
+    32
+}
+
+/// `[bar]`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BarParams {
+    /// `cooling`, `advection` or `contraction_fixed`.
+    pub case: CaseName,
+    /// Pressure difference bottom − top (advection only).
+    #[serde(default)]
+    pub pressure_drop: Option<Quantity<Pressure>>,
+    /// Seed of the A-Fig. 8 packing.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Points per circle of the mesh (8 … 256).
+    #[serde(default = "default_segments")]
+    pub segments: u32,
+    /// Whether pores holding only liquid may go into tension (default: the case's choice,
+    /// true for the single-phase water cases; see `thm_coupling::bar`).
+    #[serde(default)]
+    pub liquid_tension: Option<bool>,
+}
+
+/// The kind's sections of the scenario file.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// `[bar]`.
+    pub bar: BarParams,
+}
+
+/// The coupled stepper of one bar case and the buffers of its frames.
+pub struct PoreScaleBar {
+    case: BarCase,
+    params: PoreScaleParams,
+    stepper: PoreScaleStepper<WaterAir>,
+    /// Cells on the vertical centreline, by height.
+    centre: Vec<usize>,
+    // Frame buffers.
+    cell_pressure: Vec<f64>,
+    cell_fraction: Vec<f64>,
+    cell_liquid_density: Vec<f64>,
+    cell_gas_density: Vec<f64>,
+    cell_kind: Vec<f64>,
+    sphere_position: Vec<[f64; 3]>,
+    sphere_force: Vec<[f64; 3]>,
+}
+
+impl std::fmt::Debug for PoreScaleBar {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PoreScaleBar")
+            .field("case", &self.case)
+            .finish_non_exhaustive()
+    }
+}
+
+fn physics(step: u64, time: f64, e: CouplingError) -> RunError {
+    match e {
+        CouplingError::Unphysical {
+            quantity,
+            place,
+            index,
+            value,
+            step: s,
+            ..
+        } => RunError::Unstable {
+            quantity: quantity.into(),
+            place: format!("{place} {index} (coupled step {s})"),
+            step,
+            time,
+            value,
+        },
+        other => RunError::Physics {
+            step,
+            time,
+            message: other.to_string(),
+        },
+    }
+}
+
+impl PoreScaleBar {
+    fn sorted_centre(state: &PoreScaleState) -> Vec<usize> {
+        let mesh = &state.mesh.mesh;
+        let mut centre = centreline_cells(mesh);
+        centre.sort_by(|&a, &b| mesh.cell_centroid[a][1].total_cmp(&mesh.cell_centroid[b][1]));
+        centre
+    }
+
+    /// Temperature of the centreline cell nearest mid-height \[K\].
+    fn mid_temperature(&self, state: &PoreScaleState) -> f64 {
+        let mesh = &state.mesh.mesh;
+        let mid = 0.5 * thm_coupling::bar::BAR_LENGTH;
+        self.centre
+            .iter()
+            .min_by(|&&a, &&b| {
+                (mesh.cell_centroid[a][1] - mid)
+                    .abs()
+                    .total_cmp(&(mesh.cell_centroid[b][1] - mid).abs())
+            })
+            .map_or(f64::NAN, |&c| state.heat.temperature[c])
+    }
+}
+
+fn range(v: &[f64]) -> [f64; 2] {
+    v.iter()
+        .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], &x| {
+            [a.min(x), b.max(x)]
+        })
+}
+
+impl Scenario for PoreScaleBar {
+    const KIND: &'static str = "pore_scale_bar";
+    const STATE_VERSION: u32 = 1;
+    type Params = Params;
+    type State = PoreScaleState;
+
+    fn init(p: &Params, _time: &TimeControl) -> Result<(Self, PoreScaleState), ConfigError> {
+        let b = &p.bar;
+        let case = match (b.case, &b.pressure_drop) {
+            (CaseName::Advection, Some(dp)) => BarCase::Advection {
+                pressure_drop: dp.positive("bar.pressure_drop")?,
+            },
+            (CaseName::Advection, None) => {
+                return Err(ConfigError::new(
+                    "bar.pressure_drop",
+                    "required for case = \"advection\" (paper: \"0.9 MPa\" or \"9.9 MPa\")",
+                ));
+            }
+            (_, Some(_)) => {
+                return Err(ConfigError::new(
+                    "bar.pressure_drop",
+                    "only for case = \"advection\"",
+                ));
+            }
+            (CaseName::Cooling, None) => BarCase::Cooling,
+            (CaseName::ContractionFixed, None) => BarCase::ContractionFixed,
+        };
+        if !(8..=256).contains(&b.segments) {
+            return Err(ConfigError::new(
+                "bar.segments",
+                format!("must be in 8 … 256, got {}", b.segments),
+            ));
+        }
+        let mut params = bar_params(case, b.segments);
+        if let Some(t) = b.liquid_tension {
+            params.liquid_tension = t;
+        }
+        let config = params
+            .validate()
+            .map_err(|e| ConfigError::new("bar", e.to_string()))?;
+        let state = bar_state(case, &config, b.seed, &water_air())
+            .map_err(|e| ConfigError::new("bar", e.to_string()))?;
+        let stepper = PoreScaleStepper::new(config, water_air(), &state)
+            .map_err(|e| ConfigError::new("bar", e.to_string()))?;
+        let centre = Self::sorted_centre(&state);
+        Ok((
+            Self {
+                case,
+                params,
+                stepper,
+                centre,
+                cell_pressure: Vec::new(),
+                cell_fraction: Vec::new(),
+                cell_liquid_density: Vec::new(),
+                cell_gas_density: Vec::new(),
+                cell_kind: Vec::new(),
+                sphere_position: Vec::new(),
+                sphere_force: Vec::new(),
+            },
+            state,
+        ))
+    }
+
+    fn restore(&mut self, state: &PoreScaleState) -> Result<(), RunError> {
+        let config = self.params.validate().map_err(|e| RunError::Physics {
+            step: state.step,
+            time: state.time,
+            message: e.to_string(),
+        })?;
+        self.stepper = PoreScaleStepper::new(config, water_air(), state)
+            .map_err(|e| physics(state.step, state.time, e))?;
+        self.centre = Self::sorted_centre(state);
+        Ok(())
+    }
+
+    fn step(&mut self, state: &mut PoreScaleState, step: u64, dt: f64) -> Result<(), RunError> {
+        let time = state.time;
+        self.stepper
+            .step(state, dt)
+            .map_err(|e| physics(step, time, e))?;
+        if state.remeshes > 0 {
+            self.centre = Self::sorted_centre(state);
+        }
+        Ok(())
+    }
+
+    fn monitor_columns(&self) -> Vec<Column> {
+        vec![
+            Column::new("max_temperature", "K"),
+            Column::new("min_temperature", "K"),
+            Column::new("mid_centreline_temperature", "K"),
+            Column::new("min_pressure", "Pa"),
+            Column::new("max_pressure", "Pa"),
+            Column::new("min_liquid_density", "kg/m^3"),
+            Column::new("max_liquid_density", "kg/m^3"),
+            Column::new("liquid_mass", "kg"),
+            Column::new("gas_mass", "kg"),
+            Column::new("thermal_energy", "J"),
+        ]
+    }
+
+    fn monitor(&self, state: &PoreScaleState, values: &mut Vec<f64>) {
+        let [t_min, t_max] = range(&state.heat.temperature);
+        let [p_min, p_max] = range(&state.flow.pressure);
+        let [r_min, r_max] = range(&state.flow.liquid_density);
+        values.extend([
+            t_max,
+            t_min,
+            self.mid_temperature(state),
+            p_min,
+            p_max,
+            r_min,
+            r_max,
+            state.liquid_mass(),
+            state.gas_mass(),
+            state.thermal_energy(&self.params.heat),
+        ]);
+    }
+
+    fn frame(&mut self, state: &PoreScaleState, sink: &mut FrameSink<'_>) -> Result<(), IoError> {
+        let mesh = &state.mesh.mesh;
+        let n = mesh.n_cells();
+        let flow = &state.flow;
+        self.cell_pressure.clear();
+        self.cell_pressure.resize(n, 0.0);
+        self.cell_fraction.clear();
+        self.cell_fraction.resize(n, 0.0);
+        self.cell_liquid_density.clear();
+        self.cell_liquid_density.resize(n, 0.0);
+        self.cell_gas_density.clear();
+        self.cell_gas_density.resize(n, 0.0);
+        for (p, &c) in self.stepper.network().pore_cell().iter().enumerate() {
+            let c = c as usize;
+            self.cell_pressure[c] = flow.pressure[p];
+            self.cell_fraction[c] = flow.liquid_fraction[p];
+            self.cell_liquid_density[c] = flow.liquid_density[p];
+            self.cell_gas_density[c] = flow.gas_density[p];
+        }
+        self.cell_kind.clear();
+        self.cell_kind.extend(
+            mesh.cell_kind
+                .iter()
+                .map(|k| if k.is_fluid() { 0.0 } else { 1.0 }),
+        );
+        let cells = UnstructuredGrid::triangles(&mesh.vertices, &mesh.cell_vertices)
+            .with_cell_field(
+                "temperature [K]",
+                FieldValues::Scalar(&state.heat.temperature),
+            )
+            .with_cell_field(
+                "pressure [Pa] (fluid cells)",
+                FieldValues::Scalar(&self.cell_pressure),
+            )
+            .with_cell_field(
+                "liquid_fraction [1]",
+                FieldValues::Scalar(&self.cell_fraction),
+            )
+            .with_cell_field(
+                "liquid_density [kg/m^3]",
+                FieldValues::Scalar(&self.cell_liquid_density),
+            )
+            .with_cell_field(
+                "gas_density [kg/m^3]",
+                FieldValues::Scalar(&self.cell_gas_density),
+            )
+            .with_cell_field("solid [1]", FieldValues::Scalar(&self.cell_kind));
+        sink("cells", &cells)?;
+        let p = &state.dem.particles;
+        self.sphere_position.clear();
+        self.sphere_position
+            .extend(p.position.iter().map(|x| [x.x, x.y, x.z]));
+        self.sphere_force.clear();
+        // The force of the last fluid-forces stage (A-Eqs. 52–54), also with a held skeleton.
+        // (zero before the first step).
+        self.sphere_force
+            .extend(self.stepper.fluid_force().iter().map(|f| [f[0], f[1], 0.0]));
+        self.sphere_force.resize(p.position.len(), [0.0; 3]);
+        let spheres = UnstructuredGrid::particles(&self.sphere_position)
+            .with_point_field("radius [m]", FieldValues::Scalar(&p.radius))
+            .with_point_field("temperature [K]", FieldValues::Scalar(&p.temperature))
+            .with_point_field("fluid_force [N]", FieldValues::Vector3(&self.sphere_force));
+        sink("spheres", &spheres)
+    }
+
+    fn summary(&self, state: &PoreScaleState, _time: f64) -> Vec<SummaryRow> {
+        let mut values = Vec::new();
+        self.monitor(state, &mut values);
+        // The paper's figures at the end of its run, where they are stated.
+        let paper = |k: usize| match (self.case, k) {
+            (BarCase::ContractionFixed, 0) => Some(333.3),
+            (BarCase::ContractionFixed, 4) => Some(73.0e3),
+            (BarCase::Cooling, 5) => Some(1000.02),
+            (BarCase::Cooling, 6) => Some(1014.28),
+            _ => None,
+        };
+        self.monitor_columns()
+            .into_iter()
+            .zip(values)
+            .enumerate()
+            .map(|(k, (c, measured))| SummaryRow {
+                quantity: c.name,
+                unit: c.unit,
+                measured,
+                reference: paper(k),
+            })
+            .collect()
+    }
+}
