@@ -65,6 +65,7 @@ pub use state::{
     InitialFluid, PoreScaleState, cell_capacities, circles_of, contact_normal_stress, contacts_of,
 };
 
+use std::time::Instant;
 use thm_dem::{CohesiveFrictional, Stepper, StepperParams};
 use thm_fvm_heat::{FlowInput, HeatGeometry, HeatModel, HeatStepper};
 use thm_vpn_flow::{FlowStepper, Network, PoreFluid};
@@ -85,6 +86,25 @@ pub struct StepReport {
     pub max_reynolds: f64,
     /// Why the mesh was rebuilt at the end of the step, if it was.
     pub remeshed: Option<RemeshReason>,
+    /// Wall time of each stage \[s\] (a diagnostic for benchmarks; not part of the physics).
+    pub stage_seconds: StageSeconds,
+}
+
+/// Wall time of the stages of one coupled step \[s\].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StageSeconds {
+    /// Stage 1: fluid forces on the spheres.
+    pub fluid_forces: f64,
+    /// Stage 2: the DEM steps.
+    pub dem: f64,
+    /// Stages 3–4: mesh motion, S2S apertures, the network and heat geometry that follow.
+    pub mesh: f64,
+    /// Stage 5: flow.
+    pub flow: f64,
+    /// Stage 6: heat, with the capacities and the closure at the new temperatures.
+    pub heat: f64,
+    /// Stages 7–8: sphere radii and the remesh (with its remap).
+    pub radii_and_remesh: f64,
 }
 
 /// The coupled stepper: the composed solvers' scratch and what is derived from the state's
@@ -177,6 +197,13 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
         }
         self.check(state)?;
         let free = self.config.params.skeleton == params::Skeleton::Free;
+        let mut seconds = StageSeconds::default();
+        let mut clock = Instant::now();
+        let mut lap = |into: &mut f64| {
+            let now = Instant::now();
+            *into = (now - clock).as_secs_f64();
+            clock = now;
+        };
         self.old_capacity = cell_capacities(state, &self.config.params.heat);
         stages::fluid_forces(
             &self.network,
@@ -186,12 +213,14 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             &mut self.force,
             &mut state.dem,
         )?;
+        lap(&mut seconds.fluid_forces);
         let mut dem_steps = 0;
         if free {
             let (h, n) = dem_substeps(self.config.params.dem.time_step, dt);
             let dem = self.dem_stepper(h)?;
             stages::dem_steps(dem, h, n, &mut state.dem, &mut state.rotation)?;
             dem_steps = n;
+            lap(&mut seconds.dem);
             stages::mesh_motion(
                 &mut self.motion,
                 &mut state.mesh,
@@ -214,6 +243,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             self.heat_geometry
                 .update_positions(&self.heat_model, &state.mesh.mesh)
                 .map_err(CouplingError::Heat)?;
+            lap(&mut seconds.mesh);
         }
         let FlowTransfer {
             substeps: flow_substeps,
@@ -231,6 +261,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             &mut self.input,
             dt,
         )?;
+        lap(&mut seconds.flow);
         self.new_capacity = cell_capacities(state, &self.config.params.heat);
         let heat_substeps = stages::heat_stage(
             &mut self.heat,
@@ -249,6 +280,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             &mut state.heat,
             dt,
         )?;
+        lap(&mut seconds.heat);
         let mut remeshed = None;
         if free {
             stages::sphere_radii(
@@ -286,6 +318,9 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
                 self.heat_geometry = geometry;
             }
         }
+        if free {
+            lap(&mut seconds.radii_and_remesh);
+        }
         state.step += 1;
         state.time += dt;
         Ok(StepReport {
@@ -294,6 +329,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             heat_substeps,
             max_reynolds,
             remeshed,
+            stage_seconds: seconds,
         })
     }
 
