@@ -311,3 +311,52 @@ fn bad_input_names_the_item() {
             .contains("thermal_expansion")
     );
 }
+
+#[test]
+fn pressure_boundaries_that_no_pore_path_joins_are_an_error_naming_them() {
+    use thm_coupling::pore_scale::check_pressure_paths;
+    use thm_vpn_flow::{BoundaryCondition, Network, NetworkParts};
+    let reservoir = |pressure| BoundaryCondition::Pressure {
+        pressure,
+        temperature: 293.15,
+        entering_liquid_fraction: 1.0,
+    };
+    // Pore 0 at the 0.2 MPa boundary, pore 2 at the 0.1 MPa one; pore 1 between them.
+    let network = |channels: Vec<[u32; 2]>, p1: f64| {
+        let nc = channels.len();
+        Network::new(NetworkParts {
+            n_pores: 3,
+            width: 8e-3,
+            channel_pores: channels,
+            channel_length: vec![1e-3; nc],
+            channel_aperture: vec![3e-6; nc],
+            boundaries: vec![reservoir(2e5), reservoir(p1)],
+            link_pore: vec![0, 2],
+            link_group: vec![0, 1],
+            link_length: vec![1e-3; 2],
+            link_aperture: vec![3e-6; 2],
+            link_face_length: vec![1e-3; 2],
+            ..Default::default()
+        })
+        .expect("network")
+    };
+    check_pressure_paths(&network(vec![[0, 1], [1, 2]], 1e5)).expect("joined");
+    let err = check_pressure_paths(&network(vec![[0, 1]], 1e5)).expect_err("cut");
+    assert!(
+        matches!(
+            err,
+            CouplingError::NoPressurePath {
+                first: 0,
+                second: 1,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(
+        err.to_string().contains("flow boundary 0 (200000 Pa)"),
+        "{err}"
+    );
+    // Equal pressures drive nothing: no path needed.
+    check_pressure_paths(&network(vec![[0, 1]], 2e5)).expect("equal pressures");
+}

@@ -57,4 +57,21 @@ pub enum CouplingError {
         /// The expected length.
         expected: usize,
     },
+    /// Two flow boundaries at different pressures that no chain of pores and channels joins:
+    /// the pressure drop between them could drive no flow (a network cut in two, or a side
+    /// whose pores are all sealed).
+    #[error(
+        "no path of pores and channels joins flow boundary {first} ({first_pressure} Pa) and \
+         flow boundary {second} ({second_pressure} Pa) (`flow_boundaries` entries)"
+    )]
+    NoPressurePath {
+        /// Index of the first boundary in `flow_boundaries`.
+        first: usize,
+        /// Its pressure \[Pa\].
+        first_pressure: f64,
+        /// Index of the second boundary.
+        second: usize,
+        /// Its pressure \[Pa\].
+        second_pressure: f64,
+    },
 }

@@ -396,7 +396,64 @@ fn derived(
         config.params.boundary_reduction_factor,
     )
     .map_err(CouplingError::Flow)?;
+    check_pressure_paths(&network)?;
     let model = HeatModel::new(&config.params.heat, mesh).map_err(CouplingError::Heat)?;
     let geometry = HeatGeometry::new(&model, mesh).map_err(CouplingError::Heat)?;
     Ok((network, model, geometry))
+}
+
+/// Every two prescribed-pressure boundaries at different pressures are joined by some chain
+/// of pores and channels ([`CouplingError::NoPressurePath`] otherwise).
+pub fn check_pressure_paths(network: &Network) -> Result<(), CouplingError> {
+    use thm_vpn_flow::BoundaryCondition;
+    let parts = network.parts();
+    let n = network.n_pores();
+    // Connected components of the pore graph (union–find with path halving).
+    let mut root: Vec<usize> = (0..n).collect();
+    fn find(root: &mut [usize], mut a: usize) -> usize {
+        while root[a] != a {
+            root[a] = root[root[a]];
+            a = root[a];
+        }
+        a
+    }
+    for &[a, b] in &parts.channel_pores {
+        let (ra, rb) = (find(&mut root, a as usize), find(&mut root, b as usize));
+        if ra != rb {
+            root[ra.max(rb)] = ra.min(rb);
+        }
+    }
+    // Components each pressure boundary reaches, sorted.
+    let groups = parts.boundaries.len();
+    let mut reach: Vec<Vec<usize>> = vec![Vec::new(); groups];
+    for k in 0..network.n_links() {
+        let g = parts.link_group[k] as usize;
+        let c = find(&mut root, parts.link_pore[k] as usize);
+        reach[g].push(c);
+    }
+    for r in &mut reach {
+        r.sort_unstable();
+        r.dedup();
+    }
+    let pressure = |g: usize| match parts.boundaries[g] {
+        BoundaryCondition::Pressure { pressure, .. } => Some(pressure),
+        _ => None,
+    };
+    for a in 0..groups {
+        for b in a + 1..groups {
+            let (Some(pa), Some(pb)) = (pressure(a), pressure(b)) else {
+                continue;
+            };
+            let joined = reach[a].iter().any(|c| reach[b].binary_search(c).is_ok());
+            if pa != pb && !joined {
+                return Err(CouplingError::NoPressurePath {
+                    first: a,
+                    first_pressure: pa,
+                    second: b,
+                    second_pressure: pb,
+                });
+            }
+        }
+    }
+    Ok(())
 }
