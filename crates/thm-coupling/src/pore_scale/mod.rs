@@ -175,6 +175,30 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
         &self.input
     }
 
+    /// Mean fluid speed in each channel over the last step \[m/s\]: the step's mean mass
+    /// rate over the upwind pore's mixture density, the aperture and the width,
+    /// `|ṁ| / (ρ_up h w)` (zero before the first step and in closed channels).
+    pub fn channel_speeds(&self, state: &PoreScaleState) -> Vec<f64> {
+        let parts = self.network.parts();
+        let w = self.network.width();
+        let flow = &state.flow;
+        (0..self.network.n_channels())
+            .map(|c| {
+                let m = self.input.channel_mass_flux.get(c).copied().unwrap_or(0.0);
+                let [i, j] = parts.channel_pores[c];
+                let up = if m >= 0.0 { i } else { j } as usize;
+                let a = flow.liquid_fraction[up];
+                let rho = a * flow.liquid_density[up] + (1.0 - a) * flow.gas_density[up];
+                let h = parts.channel_aperture[c];
+                if m == 0.0 || h <= 0.0 || rho <= 0.0 {
+                    0.0
+                } else {
+                    m.abs() / (rho * h * w)
+                }
+            })
+            .collect()
+    }
+
     /// The fluid force on each sphere applied in the last step \[N\] (x, y).
     pub fn fluid_force(&self) -> &[[f64; 2]] {
         &self.force
