@@ -87,26 +87,7 @@ impl FlowStepper {
         dv_dt: &[f64],
         dt: f64,
     ) -> Result<StepReport, FlowError> {
-        if !(dt.is_finite() && dt > 0.0) {
-            return Err(FlowError::OutOfRange {
-                name: "dt",
-                range: "> 0 s",
-                value: dt,
-            });
-        }
-        self.prepare(network, state, fluid, dv_dt)?;
-        self.channel_mass.clear();
-        self.channel_mass.resize(network.n_channels(), 0.0);
-        self.link_mass.clear();
-        self.link_mass.resize(network.n_links(), 0.0);
-        let ng = network.n_groups();
-        let mut report = StepReport {
-            substeps: 0,
-            smallest_substep: f64::INFINITY,
-            max_reynolds: 0.0,
-            boundary_liquid_rate: vec![0.0; ng],
-            boundary_gas_rate: vec![0.0; ng],
-        };
+        let mut report = self.begin_step(network, state, fluid, dv_dt, dt)?;
         let max_tries = self.config.parameters().max_substeps;
         let mut tries = 0u32;
         let mut remaining = dt;
@@ -122,7 +103,7 @@ impl FlowStepper {
                     step: state.step,
                     substeps: report.substeps,
                     dt_limit: h,
-                    limit: "implicit positivity",
+                    limit: "implicit sub-step rejected (positivity, closure or convergence)",
                     pore: usize::MAX,
                 });
             }
@@ -142,25 +123,7 @@ impl FlowStepper {
                     continue;
                 }
             }
-            report.boundary_liquid_rate.fill(0.0);
-            report.boundary_gas_rate.fill(0.0);
-            for (k, f) in self.link.iter().enumerate() {
-                let g = network.parts().link_group[k] as usize;
-                report.boundary_liquid_rate[g] += f.liquid;
-                report.boundary_gas_rate[g] += f.gas;
-            }
-            for (m, f) in self.channel_mass.iter_mut().zip(&self.channel) {
-                *m += h * (f.liquid + f.gas);
-            }
-            for (m, f) in self.link_mass.iter_mut().zip(&self.link) {
-                *m += h * (f.liquid + f.gas);
-            }
-            for g in 0..ng {
-                state.boundary_liquid_inflow[g] += h * report.boundary_liquid_rate[g];
-                state.boundary_gas_inflow[g] += h * report.boundary_gas_rate[g];
-            }
-            report.substeps += 1;
-            report.smallest_substep = report.smallest_substep.min(h);
+            self.record_substep(network, state, &mut report, h);
             remaining = if h >= remaining { 0.0 } else { remaining - h };
         }
         state.step += 1;

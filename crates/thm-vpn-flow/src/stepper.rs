@@ -648,6 +648,70 @@ impl FlowStepper {
         Ok(())
     }
 
+    /// Checks `dt`, sizes the buffers for `state` and clears the step's mass transfers: the
+    /// start of [`Self::step`] and [`Self::implicit_step`].
+    pub(crate) fn begin_step(
+        &mut self,
+        network: &Network,
+        state: &FlowState,
+        fluid: &impl PoreFluid,
+        dv_dt: &[f64],
+        dt: f64,
+    ) -> Result<StepReport, FlowError> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(FlowError::OutOfRange {
+                name: "dt",
+                range: "> 0 s",
+                value: dt,
+            });
+        }
+        self.prepare(network, state, fluid, dv_dt)?;
+        self.channel_mass.clear();
+        self.channel_mass.resize(network.n_channels(), 0.0);
+        self.link_mass.clear();
+        self.link_mass.resize(network.n_links(), 0.0);
+        let ng = network.n_groups();
+        Ok(StepReport {
+            substeps: 0,
+            smallest_substep: f64::INFINITY,
+            max_reynolds: 0.0,
+            boundary_liquid_rate: vec![0.0; ng],
+            boundary_gas_rate: vec![0.0; ng],
+        })
+    }
+
+    /// Records an accepted sub-step of `h` moved by the stepper's channel and link fluxes:
+    /// the boundary rates of `report`, the channel and link mass transfers, the state's
+    /// cumulative boundary inflows (serial over the links, fixed order) and the sub-step
+    /// count.
+    pub(crate) fn record_substep(
+        &mut self,
+        network: &Network,
+        state: &mut FlowState,
+        report: &mut StepReport,
+        h: f64,
+    ) {
+        report.boundary_liquid_rate.fill(0.0);
+        report.boundary_gas_rate.fill(0.0);
+        for (k, f) in self.link.iter().enumerate() {
+            let g = network.parts().link_group[k] as usize;
+            report.boundary_liquid_rate[g] += f.liquid;
+            report.boundary_gas_rate[g] += f.gas;
+        }
+        for (m, f) in self.channel_mass.iter_mut().zip(&self.channel) {
+            *m += h * (f.liquid + f.gas);
+        }
+        for (m, f) in self.link_mass.iter_mut().zip(&self.link) {
+            *m += h * (f.liquid + f.gas);
+        }
+        for g in 0..network.n_groups() {
+            state.boundary_liquid_inflow[g] += h * report.boundary_liquid_rate[g];
+            state.boundary_gas_inflow[g] += h * report.boundary_gas_rate[g];
+        }
+        report.substeps += 1;
+        report.smallest_substep = report.smallest_substep.min(h);
+    }
+
     /// The largest stable sub-step \[s\] for the current state (stages 1–3 without update).
     pub fn stable_substep(
         &mut self,
@@ -683,26 +747,7 @@ impl FlowStepper {
         dv_dt: &[f64],
         dt: f64,
     ) -> Result<StepReport, FlowError> {
-        if !(dt.is_finite() && dt > 0.0) {
-            return Err(FlowError::OutOfRange {
-                name: "dt",
-                range: "> 0 s",
-                value: dt,
-            });
-        }
-        self.prepare(network, state, fluid, dv_dt)?;
-        self.channel_mass.clear();
-        self.channel_mass.resize(network.n_channels(), 0.0);
-        self.link_mass.clear();
-        self.link_mass.resize(network.n_links(), 0.0);
-        let ng = network.n_groups();
-        let mut report = StepReport {
-            substeps: 0,
-            smallest_substep: f64::INFINITY,
-            max_reynolds: 0.0,
-            boundary_liquid_rate: vec![0.0; ng],
-            boundary_gas_rate: vec![0.0; ng],
-        };
+        let mut report = self.begin_step(network, state, fluid, dv_dt, dt)?;
         let max_substeps = self.config.parameters().max_substeps;
         let mut remaining = dt;
         while remaining > 0.0 {
@@ -732,28 +777,9 @@ impl FlowStepper {
             } else {
                 remaining / (remaining / limit.dt).ceil()
             };
-            // Diagnostics of this sub-step (serial over the links, fixed order).
             report.max_reynolds = report.max_reynolds.max(limit.max_reynolds);
-            report.boundary_liquid_rate.fill(0.0);
-            report.boundary_gas_rate.fill(0.0);
-            for (k, f) in self.link.iter().enumerate() {
-                let g = network.parts().link_group[k] as usize;
-                report.boundary_liquid_rate[g] += f.liquid;
-                report.boundary_gas_rate[g] += f.gas;
-            }
-            for (m, f) in self.channel_mass.iter_mut().zip(&self.channel) {
-                *m += h * (f.liquid + f.gas);
-            }
-            for (m, f) in self.link_mass.iter_mut().zip(&self.link) {
-                *m += h * (f.liquid + f.gas);
-            }
-            for g in 0..ng {
-                state.boundary_liquid_inflow[g] += h * report.boundary_liquid_rate[g];
-                state.boundary_gas_inflow[g] += h * report.boundary_gas_rate[g];
-            }
+            self.record_substep(network, state, &mut report, h);
             advance_and_close(state, fluid, &self.rates, dv_dt, h, substep)?;
-            report.substeps += 1;
-            report.smallest_substep = report.smallest_substep.min(h);
             remaining = if h >= remaining { 0.0 } else { remaining - h };
         }
         state.step += 1;
