@@ -69,8 +69,7 @@
 //!
 //! In place: the pore-scale step, implicit pressure and heat steps for long runs, the bar
 //! cases of A-Sects. 4, 5 and 6 case b (also as the `thm run` kind `pore_scale_bar`). Not yet
-//! here: Péclet numbers and pore velocities of A-Sect. 5, the energy balance against the
-//! boundary heat flow, and the MPM×DEM scheme.
+//! here: the Péclet numbers of A-Sect. 5 and the MPM×DEM scheme.
 //!
 //! ## Verification ([`verification::cases`])
 //!
@@ -78,9 +77,11 @@
 //!   closed, adiabatic bonded packing constant to 10⁻¹² relative, with a free skeleton
 //!   remeshed almost every step and with a fixed skeleton, explicit and implicit.
 //! - `coupling/bar_cooling_advection`: A-Sects. 4–5, the liquid mass against the reservoir
-//!   inflow to 10⁻¹², the time-step rule (halving Δt_C = 1 s moves T_max by < 0.05 K), and the
+//!   inflow to 10⁻¹², the thermal energy against the energy through the boundary
+//!   (`StepReport::boundary_energy`) to 10⁻¹⁰, the time-step rule (halving Δt_C = 1 s moves T_max by < 0.05 K), and the
 //!   paper's 0.52 K, density range and advection differences as reported rows.
-//! - `coupling/bar_contraction_fixed`: A-Sect. 6 case b, phase masses to 10⁻¹², the
+//! - `coupling/bar_contraction_fixed`: A-Sect. 6 case b, phase masses to 10⁻¹², the energy
+//!   balance to 10⁻¹⁰, the
 //!   time-step rule (halving Δt_C = 0.1 s moves T_max by < 0.1 K), and the paper's 333.3 K and
 //!   73.0 kPa as reported rows.
 

@@ -207,6 +207,8 @@ fn closed_conservation_case() -> Result<CaseOutput, CaseError> {
 
 /// What one run of A-Sect. 6 case b gives at 17 s.
 struct CaseBRun {
+    /// |ΔE − Σ boundary energy| / |Σ boundary energy| over the run.
+    energy_balance: f64,
     largest_temperature: f64,
     pressure_range: [f64; 2],
     mass_drift: [f64; 2],
@@ -226,10 +228,13 @@ fn run_case_b(dt: f64) -> Result<CaseBRun, CouplingError> {
     let (cells, pores) = (s.mesh.mesh.n_cells(), s.flow.pressure.len());
     let mut stepper = PoreScaleStepper::new(config, water_air(), &s)?;
     let start = [s.liquid_mass(), s.gas_mass()];
+    let heat = bar_params(case, 32).heat;
+    let e0 = s.thermal_energy(&heat);
+    let mut entered = 0.0;
     let steps = (17.0 / dt).round() as usize;
     let mut drift = [0.0f64; 2];
     for _ in 0..steps {
-        stepper.step(&mut s, dt)?;
+        entered += stepper.step(&mut s, dt)?.boundary_energy;
         for (k, now) in [s.liquid_mass(), s.gas_mass()].into_iter().enumerate() {
             drift[k] = drift[k].max(((now - start[k]) / start[k]).abs());
         }
@@ -247,6 +252,7 @@ fn run_case_b(dt: f64) -> Result<CaseBRun, CouplingError> {
         .collect();
     centre.sort_by(|a, b| a.0.total_cmp(&b.0));
     Ok(CaseBRun {
+        energy_balance: ((s.thermal_energy(&heat) - e0 - entered) / entered).abs(),
         largest_temperature,
         pressure_range,
         mass_drift: drift,
@@ -269,6 +275,12 @@ fn contraction_fixed_case() -> Result<CaseOutput, CaseError> {
             1e-12,
         ));
     }
+    out.rows.push(Row::at_most(
+        format!("|ΔE − boundary energy| / boundary energy over 17 s, Δt_C = {coarse} s"),
+        "",
+        a.energy_balance,
+        1e-10,
+    ));
     out.rows.push(Row::at_most(
         format!("time-step rule: |ΔT_max(17 s)| between Δt_C = {coarse} s and {fine} s"),
         "K",
@@ -344,6 +356,8 @@ struct CoolingRun {
     equivalent: [f64; 2],
     /// Largest channel speed over the last step \[m/s\].
     largest_speed: f64,
+    /// |ΔE − Σ boundary energy| / |Σ boundary energy| over the run.
+    energy_balance: f64,
     /// Superficial (Darcy) velocity of the last step: the mass entering through the
     /// boundary over ρ_w W b \[m/s\].
     darcy_velocity: f64,
@@ -374,11 +388,14 @@ fn run_cooling(case: BarCase, dt: f64) -> Result<CoolingRun, CouplingError> {
         equivalent: [lambda, rho_c],
         largest_speed: 0.0,
         darcy_velocity: 0.0,
+        energy_balance: 0.0,
     };
+    let e0 = s.thermal_energy(&heat);
+    let mut entered = 0.0;
     for &t_report in &REPORT_TIMES {
         let steps = ((t_report - s.time) / dt).round() as usize;
         for _ in 0..steps {
-            stepper.step(&mut s, dt)?;
+            entered += stepper.step(&mut s, dt)?.boundary_energy;
         }
         let mesh = &s.mesh.mesh;
         let error = centre
@@ -406,6 +423,7 @@ fn run_cooling(case: BarCase, dt: f64) -> Result<CoolingRun, CouplingError> {
         .fold([f64::MAX, f64::MIN], |[a, b], &r| [a.min(r), b.max(r)]);
     let inflow: f64 = s.flow.boundary_liquid_inflow.iter().sum();
     out.mass_balance = ((s.liquid_mass() - m0 - inflow) / m0).abs();
+    out.energy_balance = ((s.thermal_energy(&heat) - e0 - entered) / entered).abs();
     out.largest_speed = stepper.channel_speeds(&s).into_iter().fold(0.0, f64::max);
     let entering: f64 = stepper
         .heat_input()
@@ -444,6 +462,18 @@ fn cooling_advection_case() -> Result<CaseOutput, CaseError> {
             "",
             r.mass_balance,
             1e-12,
+        ));
+    }
+    for (label, r) in [
+        ("no pressure drop", &still),
+        ("0.9 MPa", &low),
+        ("9.9 MPa", &high),
+    ] {
+        out.rows.push(Row::at_most(
+            format!("{label}: |ΔE − boundary energy| / boundary energy over 400 s"),
+            "",
+            r.energy_balance,
+            1e-10,
         ));
     }
     out.rows.push(Row::at_most(

@@ -213,6 +213,44 @@ impl HeatStepper {
                 value: rhs[c],
             });
         }
+        // Energy through the boundary over the step, with the terms the matrix used.
+        crate::stepper::boundary_faces(geometry, &mut self.boundary_face_list);
+        let mut entered = 0.0;
+        for &f in &self.boundary_face_list {
+            let f = f as usize;
+            let FaceGeometry::Boundary { slot } = geometry.face[f] else {
+                continue;
+            };
+            let BoundaryFace {
+                side,
+                normal_distance,
+                area,
+                tangent,
+            } = geometry.boundary[slot as usize];
+            let c = mesh.face_cells[f][0] as usize;
+            let tc = rhs[c];
+            let cond = &model.sides[side as usize];
+            entered += match cond {
+                SideCondition::HeatFlux(q) => q * area,
+                SideCondition::Temperature(_) | SideCondition::Convective { .. } => {
+                    let g = boundary_conductance(cond, self.conductivity[c], normal_distance, area);
+                    let outside = match cond {
+                        SideCondition::Convective { ambient, .. } => *ambient,
+                        _ => t_bc[side as usize],
+                    };
+                    g * (outside - dot(self.gradient[c], tangent) - tc)
+                }
+            };
+            let m = input.boundary_mass_flux[f];
+            let rate = m.abs() * cp[c];
+            entered += match (m > 0.0, cond) {
+                _ if m == 0.0 => 0.0,
+                (true, _) => -rate * (tc - t_ref),
+                (false, SideCondition::Temperature(_)) => rate * (t_bc[side as usize] - t_ref),
+                (false, _) => rate * (tc - t_ref),
+            };
+        }
+        self.boundary_energy = entered * dt;
         state.temperature.copy_from_slice(&rhs);
         state.time = t_new;
         state.steps += 1;

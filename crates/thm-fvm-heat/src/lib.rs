@@ -41,7 +41,9 @@
 //!   properties and the fluxes. [`HeatStepper::implicit_step`] is a backward-Euler
 //!   step on a sparse system (conduction alone: SPD, `faer`'s sparse Cholesky; with mass
 //!   fluxes: first-order upwind advection, sparse LU), with the cross-diffusion terms as
-//!   deferred correction, for long runs.
+//!   deferred correction, for long runs. After either, [`HeatStepper::boundary_energy`] is the
+//!   energy that crossed the outer boundary (conduction and advected enthalpy), which accounts
+//!   for the change of Σ C (T − T_ref) to round-off (property test).
 //!
 //! - **Mesh-derived coefficients** live in a [`HeatGeometry`] the caller keeps: the topology
 //!   part (face classes, boundary table, least-squares stencils, cell → channel adjacency) is

@@ -117,10 +117,28 @@ pub struct StepReport {
     pub stability_limit: f64,
 }
 
+/// The faces on the outer boundary, in face order (rebuilt when the mesh size changes).
+pub(crate) fn boundary_faces(geometry: &HeatGeometry, out: &mut Vec<u32>) {
+    out.clear();
+    out.extend(
+        geometry
+            .face
+            .iter()
+            .enumerate()
+            .filter(|(_, g)| matches!(g, FaceGeometry::Boundary { .. }))
+            .map(|(f, _)| f as u32),
+    );
+}
+
 /// Scratch buffers of the explicit step. Holds no state between calls: every buffer is
 /// recomputed from the geometry, the model, the flow input and the state.
 #[derive(Debug, Clone, Default)]
 pub struct HeatStepper {
+    /// Energy \[J\] that entered through the outer boundary during the last step
+    /// (conduction and advected enthalpy `ṁ c_p (T − T_ref)`).
+    pub(crate) boundary_energy: f64,
+    /// Faces on the outer boundary.
+    pub(crate) boundary_face_list: Vec<u32>,
     // Per cell.
     pub(crate) capacity: Vec<f64>,
     pub(crate) conductivity: Vec<f64>,
@@ -189,6 +207,7 @@ impl HeatStepper {
         // that computes them also gives the face conductances of the stability limit: one pass
         // over the mesh yields both, and the limit then sets the length.
         self.heat_rates(model, geometry, mesh, input, &state.temperature, t0, true);
+        boundary_faces(geometry, &mut self.boundary_face_list);
         let limit = self.net_heat_and_stability_limit(geometry, mesh, input);
         let allowed = model.stability_safety * limit;
         let substeps = if allowed.is_finite() {
@@ -197,6 +216,7 @@ impl HeatStepper {
             1
         };
         let h = dt / substeps as f64;
+        self.boundary_energy = h * self.boundary_heat_rate();
         if let Some(c) = self.apply_net_heat(&mut state.temperature, h) {
             return Err(non_finite_temperature(state, c, t0));
         }
@@ -214,6 +234,23 @@ impl HeatStepper {
             substep: h,
             stability_limit: limit,
         })
+    }
+
+    /// Energy \[J\] that entered the domain through its outer boundary during the last
+    /// [`Self::step`] or [`Self::implicit_step`]: conduction (cases I–III) and the enthalpy
+    /// `ṁ c_p (T − T_ref)` of the fluid that crossed it. With it, the change of
+    /// `Σ C (T − T_ref)` over a step is accounted for to round-off.
+    pub fn boundary_energy(&self) -> f64 {
+        self.boundary_energy
+    }
+
+    /// Σ over the boundary faces of the heat rate into the domain of the last face pass \[W\],
+    /// in face order.
+    fn boundary_heat_rate(&self) -> f64 {
+        self.boundary_face_list
+            .iter()
+            .map(|&f| self.face_heat[f as usize])
+            .sum()
     }
 
     /// The explicit stability limit \[s\] for this mesh, model and input (without the safety
@@ -244,6 +281,7 @@ impl HeatStepper {
         h: f64,
     ) -> Result<(), HeatError> {
         self.heat_rates(model, geometry, mesh, input, &state.temperature, t, false);
+        self.boundary_energy += h * self.boundary_heat_rate();
         if let Some(c) = self.advance(geometry, mesh, &mut state.temperature, h) {
             return Err(non_finite_temperature(state, c, t));
         }

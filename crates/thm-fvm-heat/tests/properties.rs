@@ -5,7 +5,11 @@ mod common;
 
 use common::{random_input, random_mesh, random_temperatures, table1_params};
 use proptest::prelude::*;
-use thm_fvm_heat::{CrossDiffusion, FlowInput, HeatGeometry, HeatModel, HeatState, HeatStepper};
+use thm_fvm_heat::{
+    BoundaryCondition, BoundaryParams, CrossDiffusion, FlowInput, HeatGeometry, HeatModel,
+    HeatState, HeatStepper, TemperatureSchedule,
+};
+use thm_vpn_mesh::BoundarySide;
 use thm_vpn_mesh::PoreMesh;
 
 fn energy(stepper: &HeatStepper, t: &[f64]) -> (f64, f64) {
@@ -209,6 +213,48 @@ proptest! {
             let (a, b) = range(&state.temperature);
             prop_assert!(a >= lo - 1e-9 && b <= hi + 1e-9, "range [{a}, {b}] left [{lo}, {hi}]");
         }
+    }
+
+    /// Open boundaries (a held temperature on the left, a heat flux on the right): the change
+    /// of Σ C_i T_i over a step, explicit or implicit, equals the energy the stepper reports
+    /// through the boundary, to round-off.
+    #[test]
+    fn energy_change_equals_the_boundary_energy(seed in any::<u64>(), nx in 2usize..7, ny in 2usize..7) {
+        let mesh = random_mesh(seed, nx, ny);
+        let mut params = table1_params();
+        params.boundaries = vec![
+            BoundaryParams {
+                side: BoundarySide::Left,
+                condition: BoundaryCondition::Temperature {
+                    temperature: TemperatureSchedule::Constant(350.0),
+                },
+            },
+            BoundaryParams {
+                side: BoundarySide::Right,
+                condition: BoundaryCondition::HeatFlux { flux: 2e3 },
+            },
+        ];
+        let model = HeatModel::new(&params, &mesh).unwrap();
+        let geometry = HeatGeometry::new(&model, &mesh).unwrap();
+        let input = random_input(seed, &mesh, 0.0);
+        let mut state = HeatState {
+            time: 0.0,
+            steps: 0,
+            temperature: random_temperatures(seed, mesh.n_cells()),
+        };
+        let mut stepper = HeatStepper::new();
+        stepper.prepare(&model, &geometry, &mesh, &input, &state).unwrap();
+        let (e0, scale) = energy(&stepper, &state.temperature);
+        let report = stepper.step(&model, &geometry, &mesh, &input, &mut state, 50.0).unwrap();
+        let (e1, _) = energy(&stepper, &state.temperature);
+        let q = stepper.boundary_energy();
+        prop_assert!(q != 0.0);
+        let tol = 1e-14 * scale * (report.substeps as f64 + 1.0) * mesh.n_cells() as f64;
+        prop_assert!((e1 - e0 - q).abs() <= tol, "explicit: dE {} J, boundary {} J", e1 - e0, q);
+        stepper.implicit_step(&model, &geometry, &mesh, &input, &mut state, 500.0).unwrap();
+        let (e2, _) = energy(&stepper, &state.temperature);
+        let q = stepper.boundary_energy();
+        prop_assert!((e2 - e1 - q).abs() <= 1e-11 * scale, "implicit: dE {} J, boundary {} J", e2 - e1, q);
     }
 
     /// 1 and 2 rayon threads give identical bits (explicit step with advection).

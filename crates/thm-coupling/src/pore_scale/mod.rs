@@ -86,6 +86,10 @@ pub struct StepReport {
     pub max_reynolds: f64,
     /// Why the mesh was rebuilt at the end of the step, if it was.
     pub remeshed: Option<RemeshReason>,
+    /// Energy \[J\] that entered through the outer boundary in the heat stage (conduction and
+    /// the enthalpy of the fluid that crossed it; `HeatStepper::boundary_energy`): the change
+    /// of [`PoreScaleState::thermal_energy`] over the step, to round-off.
+    pub boundary_energy: f64,
     /// Wall time of each stage \[s\] (a diagnostic for benchmarks; not part of the physics).
     pub stage_seconds: StageSeconds,
 }
@@ -305,6 +309,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             dt,
         )?;
         lap(&mut seconds.heat);
+        let boundary_energy = self.heat.boundary_energy();
         let mut remeshed = None;
         if free {
             stages::sphere_radii(
@@ -353,6 +358,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             heat_substeps,
             max_reynolds,
             remeshed,
+            boundary_energy,
             stage_seconds: seconds,
         })
     }
