@@ -78,6 +78,8 @@ pub struct PoreScaleBar {
     cell_liquid_density: Vec<f64>,
     cell_gas_density: Vec<f64>,
     cell_kind: Vec<f64>,
+    cell_velocity: Vec<[f64; 3]>,
+    channels_of_cell: Vec<f64>,
     sphere_position: Vec<[f64; 3]>,
     sphere_force: Vec<[f64; 3]>,
 }
@@ -200,6 +202,8 @@ impl Scenario for PoreScaleBar {
                 cell_liquid_density: Vec::new(),
                 cell_gas_density: Vec::new(),
                 cell_kind: Vec::new(),
+                cell_velocity: Vec::new(),
+                channels_of_cell: Vec::new(),
                 sphere_position: Vec::new(),
                 sphere_force: Vec::new(),
             },
@@ -282,6 +286,36 @@ impl Scenario for PoreScaleBar {
             self.cell_liquid_density[c] = flow.liquid_density[p];
             self.cell_gas_density[c] = flow.gas_density[p];
         }
+        // Velocity of a fluid cell: the mean over its channels of the channel's speed over the
+        // last step along the channel, signed by the flow direction (zero before the first
+        // step).
+        self.cell_velocity.clear();
+        self.cell_velocity.resize(n, [0.0; 3]);
+        self.channels_of_cell.clear();
+        self.channels_of_cell.resize(n, 0.0);
+        let network = self.stepper.network();
+        let parts = network.parts();
+        let mass_rate = &self.stepper.heat_input().channel_mass_flux;
+        for (c, speed) in self.stepper.channel_speeds(state).into_iter().enumerate() {
+            let e = parts.channel_direction.get(c).copied().unwrap_or([0.0; 2]);
+            let sign = if mass_rate.get(c).copied().unwrap_or(0.0) < 0.0 {
+                -1.0
+            } else {
+                1.0
+            };
+            for p in parts.channel_pores[c] {
+                let cell = network.pore_cell()[p as usize] as usize;
+                self.cell_velocity[cell][0] += sign * speed * e[0];
+                self.cell_velocity[cell][1] += sign * speed * e[1];
+                self.channels_of_cell[cell] += 1.0;
+            }
+        }
+        for (v, k) in self.cell_velocity.iter_mut().zip(&self.channels_of_cell) {
+            if *k > 0.0 {
+                v[0] /= k;
+                v[1] /= k;
+            }
+        }
         self.cell_kind.clear();
         self.cell_kind.extend(
             mesh.cell_kind
@@ -309,7 +343,11 @@ impl Scenario for PoreScaleBar {
                 "gas_density [kg/m^3]",
                 FieldValues::Scalar(&self.cell_gas_density),
             )
-            .with_cell_field("solid [1]", FieldValues::Scalar(&self.cell_kind));
+            .with_cell_field("solid [1]", FieldValues::Scalar(&self.cell_kind))
+            .with_cell_field(
+                "velocity [m/s] (mean of the cell's channels)",
+                FieldValues::Vector3(&self.cell_velocity),
+            );
         sink("cells", &cells)?;
         let p = &state.dem.particles;
         self.sphere_position.clear();
