@@ -227,3 +227,81 @@ pub fn centreline_cells(mesh: &thm_vpn_mesh::PoreMesh) -> Vec<usize> {
         })
         .collect()
 }
+
+/// The equivalent homogeneous bar of A-Eq. 63 on a state's mesh: the volume-weighted
+/// conductivity and heat capacity of the liquid (at the state's mean liquid density) and the
+/// solid, with the porosity of the mesh. A-Sects. 4–5 compare the network with this medium.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EquivalentMedium {
+    /// λ_eff \[W/(m K)\].
+    pub conductivity: f64,
+    /// (ρc)_eff \[J/(m³ K)\].
+    pub volumetric_heat_capacity: f64,
+    /// c of the liquid \[J/(kg K)\], for the heat that a mass flux carries.
+    pub liquid_specific_heat: f64,
+}
+
+impl EquivalentMedium {
+    /// A-Eq. 63 on `state` (single-phase liquid) with the properties of `heat`.
+    pub fn of(state: &PoreScaleState, heat: &HeatParams) -> Self {
+        let mesh = &state.mesh.mesh;
+        let porosity = mesh.fluid_area() / (BAR_WIDTH * BAR_LENGTH);
+        let rho = &state.flow.liquid_density;
+        let rho_w = rho.iter().sum::<f64>() / (rho.len().max(1) as f64);
+        Self {
+            conductivity: porosity * heat.liquid.conductivity
+                + (1.0 - porosity) * heat.solid.conductivity,
+            volumetric_heat_capacity: porosity * rho_w * heat.liquid.specific_heat
+                + (1.0 - porosity) * heat.solid.density * heat.solid.specific_heat,
+            liquid_specific_heat: heat.liquid.specific_heat,
+        }
+    }
+
+    /// α_eff = λ_eff / (ρc)_eff \[m²/s\].
+    pub fn diffusivity(&self) -> f64 {
+        self.conductivity / self.volumetric_heat_capacity
+    }
+
+    /// Speed of a thermal front carried by the liquid mass flux `mass_flux` \[kg/(m² s)\]:
+    /// V = c_w q_m / (ρc)_eff \[m/s\].
+    pub fn front_speed(&self, mass_flux: f64) -> f64 {
+        self.liquid_specific_heat * mass_flux / self.volumetric_heat_capacity
+    }
+
+    /// The bar Péclet number V L / α_eff = c_w q_m L / λ_eff at mass flux `mass_flux`.
+    pub fn bar_peclet(&self, mass_flux: f64) -> f64 {
+        self.front_speed(mass_flux) * BAR_LENGTH / self.diffusivity()
+    }
+
+    /// Temperature at height `y` and time `t` of this medium in `case` with the liquid moving
+    /// upwards at `mass_flux` (A-Eqs. 60–61 at zero flux, with advection otherwise; see
+    /// `thm_fvm_heat::verification::advection_diffusion_bar_temperature`).
+    pub fn temperature(&self, case: BarCase, y: f64, t: f64, mass_flux: f64) -> f64 {
+        thm_fvm_heat::verification::advection_diffusion_bar_temperature(
+            y,
+            t,
+            BAR_LENGTH,
+            self.diffusivity(),
+            self.front_speed(mass_flux),
+            case.initial_temperature(),
+            case.end_temperature(),
+        )
+    }
+}
+
+/// The liquid mass flux through the bar averaged since the start: the liquid that entered
+/// through the inlet over the section W b and the elapsed time \[kg/(m² s)\] (0 at t = 0 or
+/// without inflow).
+pub fn mean_mass_flux(state: &PoreScaleState) -> f64 {
+    let entered = state
+        .flow
+        .boundary_liquid_inflow
+        .iter()
+        .copied()
+        .fold(0.0, f64::max);
+    if state.time > 0.0 {
+        entered / (BAR_WIDTH * state.mesh.mesh.thickness * state.time)
+    } else {
+        0.0
+    }
+}

@@ -163,3 +163,46 @@ fn implicit_bar_steps_give_the_same_bits_on_1_and_2_threads_and_after_a_restore(
     assert_eq!(fluid_heat_bits(&one), fluid_heat_bits(&resumed));
     assert!(one.heat.temperature != start.heat.temperature);
 }
+
+/// A coupled step far above the explicit flow limit of water-filled pores (~1e-8 s): with the
+/// explicit flow scheme the flow sub-cycles under its own limit, and when the sub-steps
+/// allowed (`flow.max_substeps`) cannot cover Δt_C the step stops with an error that names
+/// the limit, its value and the pore that sets it (the state is then part-way through the
+/// flow stage, as `PoreScaleStepper::step` documents: a run restores its last checkpoint).
+/// The implicit scheme takes the same step from the same start.
+#[test]
+fn a_coupled_step_above_the_explicit_flow_limit_names_the_limit_and_the_pore() {
+    let case = BarCase::Cooling;
+    let mut params = bar_params(case, 16);
+    params.flow_scheme = thm_coupling::pore_scale::FlowScheme::Explicit;
+    params.flow.max_substeps = 50;
+    let config = params.validate().expect("parameters");
+    let mut s = bar_state(case, &config, 1, &water_air()).expect("state");
+    let start = s.clone();
+    let mut stepper = PoreScaleStepper::new(config, water_air(), &s).expect("stepper");
+    let err = stepper
+        .step(&mut s, 1.0)
+        .expect_err("1 s is ~1e8 explicit limits");
+    let CouplingError::Flow(thm_vpn_flow::FlowError::TooManySubsteps {
+        substeps,
+        dt_limit,
+        pore,
+        ..
+    }) = &err
+    else {
+        panic!("unexpected error {err}");
+    };
+    assert_eq!(*substeps, 50);
+    assert!(*dt_limit < 1e-5 && *pore < s.flow.pressure.len(), "{err}");
+    let message = err.to_string();
+    assert!(
+        message.contains("pore") && message.contains("sub-step"),
+        "{message}"
+    );
+    let mut s = start;
+    let config = bar_params(case, 16).validate().expect("parameters");
+    let mut stepper = PoreScaleStepper::new(config, water_air(), &s).expect("stepper");
+    stepper
+        .step(&mut s, 1.0)
+        .expect("implicit flow takes the step");
+}

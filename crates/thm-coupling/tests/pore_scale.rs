@@ -293,6 +293,24 @@ fn bad_input_names_the_item() {
         matches!(err, CouplingError::Unphysical { place: "cell", .. }),
         "{err}"
     );
+    // An initial state outside the range of the equation of state: at 5 K no water-air
+    // state with equal phase pressures exists; the error names the pore and the closure.
+    let err = PoreScaleState::new(
+        &config,
+        packing.to_state(2600.0, 300.0).expect("dem"),
+        &fluid(),
+        InitialFluid {
+            pressure: 1e5,
+            liquid_fraction: 0.8,
+        },
+        |_| 5.0,
+    )
+    .expect_err("outside the EOS range");
+    let message = err.to_string();
+    assert!(
+        message.contains("pore 0") && message.contains("closure") && message.contains("T = 5 K"),
+        "{message}"
+    );
     // An unphysical flow state is caught at the stage boundary, naming the pore.
     let mut s = state(&config);
     s.flow.pressure[3] = -5.0;
