@@ -6,13 +6,14 @@
 //! keys, wrong types or units and out-of-range values are errors naming the key path.
 //!
 //! The output folder receives `scenario.toml` (the resolved scenario), `history.csv`, one
-//! `.pvd` + folder of `.vtu` frames per series, `checkpoints/step_*.ckpt` and `summary.md` with
-//! history plots. A fresh run refuses a folder that already holds a run. Ctrl-C stops after the
+//! `.pvd` + folder of `.vtu` frames per series, `checkpoints/step_*.ckpt`, the kind's profiles
+//! (`profiles/*.csv`, see [`profiles`]) and `summary.md` with history and profile plots. A fresh run refuses a folder that already holds a run. Ctrl-C stops after the
 //! current step with a checkpoint; `--resume` continues bit for bit from any checkpoint.
 
 pub mod config;
 pub mod error;
 pub mod kinds;
+pub mod profiles;
 pub mod scenario;
 pub mod summary;
 pub mod units;

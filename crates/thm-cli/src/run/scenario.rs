@@ -12,6 +12,7 @@ use thm_io::{Column, CsvHistory, IoError, UnstructuredGrid, VtuSeries};
 
 use super::config::{ScenarioDocument, TimeControl, from_toml};
 use super::error::{ConfigError, RunError};
+use super::profiles::{Profile, write_profiles};
 use super::summary::{RunInfo, SummaryRow, write_summary};
 
 /// Receives the grids of one frame: `(series name, grid)`.
@@ -63,6 +64,12 @@ pub trait Scenario: Sized {
 
     /// The figures of merit reported in `summary.md` at the end of the run.
     fn summary(&self, state: &Self::State, time: f64) -> Vec<SummaryRow>;
+
+    /// Quantities along lines through the state at `time`, written at every frame and drawn
+    /// in the summary (see [`super::profiles`]). Default: none.
+    fn profiles(&self, _state: &Self::State, _time: f64) -> Vec<Profile> {
+        Vec::new()
+    }
 }
 
 /// What a checkpoint holds besides the state: enough to refuse a foreign scenario.
@@ -264,7 +271,7 @@ pub fn drive<S: Scenario>(
             };
             series[k].write_frame(step, t, grid)
         })?;
-        Ok(())
+        write_profiles(out, step, t, &scenario.profiles(state, t))
     };
     let save = |state: &S::State, step: u64| -> Result<PathBuf, RunError> {
         let path = checkpoint_path(out, step);

@@ -41,8 +41,8 @@ pub struct RunInfo<'a> {
     pub interrupted: Option<&'a Path>,
 }
 
-/// Reads a history CSV written by the driver: header cells and rows.
-fn read_history(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), RunError> {
+/// Reads a CSV written by the driver (a history or a profile): header cells and rows.
+pub(crate) fn read_history(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), RunError> {
     let text = std::fs::read_to_string(path).map_err(|e| thm_io::IoError::File {
         path: path.to_path_buf(),
         action: "read",
@@ -66,13 +66,13 @@ fn read_history(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), RunError> {
 }
 
 /// Every `k`-th element so that at most `max` remain (always keeping the last).
-fn thin<T: Copy>(v: &[T], max: usize) -> Vec<T> {
+pub(crate) fn thin<T: Clone>(v: &[T], max: usize) -> Vec<T> {
     let k = v.len().div_ceil(max.max(1)).max(1);
-    let mut out: Vec<T> = v.iter().step_by(k).copied().collect();
-    if let Some(&last) = v.last()
+    let mut out: Vec<T> = v.iter().step_by(k).cloned().collect();
+    if let Some(last) = v.last()
         && !(v.len() - 1).is_multiple_of(k)
     {
-        out.push(last);
+        out.push(last.clone());
     }
     out
 }
@@ -87,7 +87,7 @@ fn file_stem(s: &str) -> String {
         .join("_")
 }
 
-fn fmt(x: f64) -> String {
+pub(crate) fn fmt(x: f64) -> String {
     if x != 0.0 && (x.abs() < 1e-3 || x.abs() >= 1e6) {
         format!("{x:.6e}")
     } else {
@@ -206,6 +206,7 @@ pub fn write_summary<S: Scenario>(
         thm_io::write_plot_png(&plot, &out.join(&png))?;
         let _ = writeln!(md, "![{name}]({png})\n");
     }
+    super::profiles::plot_profiles(out, info.steps_done, &mut md)?;
     thm_io::fsutil::write_atomically(&out.join(SUMMARY_FILE), |w| {
         std::io::Write::write_all(w, md.as_bytes())
     })?;

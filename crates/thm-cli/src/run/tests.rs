@@ -788,9 +788,69 @@ segments = 16
         copy_dir(&full, &resumed);
         std::fs::remove_file(checkpoint_path(&resumed, 6)).unwrap();
         std::fs::remove_file(resumed.join("cells/cells_00000006.vtu")).unwrap();
+        let profile = |out: &Path, name: &str, step: u64| {
+            out.join("profiles")
+                .join(format!("centreline_{name}_{step:010}.csv"))
+        };
+        std::fs::remove_file(profile(&resumed, "temperature", 6)).unwrap();
         run(&file, &resumed, Some(&checkpoint_path(&resumed, 2))).unwrap();
         assert_same_results(&full, &resumed, "cells", &[4, 6], 6);
         assert_same_results(&full, &resumed, "spheres", &[4, 6], 6);
+        for name in ["temperature", "pore_pressure"] {
+            for step in [4, 6] {
+                let (a, b) = (profile(&full, name, step), profile(&resumed, name, step));
+                assert!(read(&a) == read(&b), "{} differs", a.display());
+            }
+        }
+        let summary = std::fs::read_to_string(resumed.join("summary.md")).unwrap();
+        for png in [
+            "profile_centreline_temperature.png",
+            "profile_centreline_pore_pressure.png",
+        ] {
+            assert!(
+                summary.contains(png) && resumed.join(png).is_file(),
+                "{png}"
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The A-Sect. 4 profile: after 2 s the heat has moved about 2 sqrt(alpha t) ~ 3 mm into
+    /// the bar, so at mid-height both the network and its reference (the equivalent bar of
+    /// A-Eq. 63) are still at the initial 323.16 K, while the end cells have cooled.
+    #[test]
+    fn cooling_profile_carries_the_equivalent_bar_as_reference() {
+        let dir = scratch("pore_bar_profile");
+        let text = CASE_B
+            .replace("case = \"contraction_fixed\"", "case = \"cooling\"")
+            .replace("end = \"0.6 s\"", "end = \"2 s\"")
+            .replace("step = \"0.1 s\"", "step = \"1 s\"");
+        let file = write_scenario(&dir, &text);
+        let out = dir.join("out");
+        run(&file, &out, None).unwrap();
+        let csv = std::fs::read_to_string(
+            out.join("profiles")
+                .join("centreline_temperature_0000000002.csv"),
+        )
+        .unwrap();
+        let mut lines = csv.lines();
+        let header = lines.next().unwrap();
+        assert!(
+            header.starts_with("time [s],y [m],T [K],equivalent bar"),
+            "{header}"
+        );
+        let rows: Vec<Vec<f64>> = lines
+            .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+            .collect();
+        let mid = rows
+            .iter()
+            .min_by(|a, b| (a[1] - 0.04).abs().total_cmp(&(b[1] - 0.04).abs()))
+            .unwrap();
+        assert_eq!(mid[0], 2.0);
+        assert!((mid[2] - 323.16).abs() < 1e-3, "{mid:?}");
+        assert!((mid[3] - 323.16).abs() < 1e-9, "{mid:?}");
+        let coldest = rows.iter().map(|r| r[2]).fold(f64::MAX, f64::min);
+        assert!(coldest < 322.0, "{coldest}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

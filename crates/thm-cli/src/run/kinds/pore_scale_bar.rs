@@ -5,13 +5,16 @@
 //! figures are read) live in `thm_coupling::bar`, where a library user reaches them too.
 
 use serde::{Deserialize, Serialize};
-use thm_coupling::bar::{BarCase, bar_params, bar_state, centreline_cells};
+use thm_coupling::bar::{
+    BarCase, EquivalentMedium, bar_params, bar_state, centreline_cells, mean_mass_flux,
+};
 use thm_coupling::pore_scale::{CouplingError, PoreScaleParams, PoreScaleState, PoreScaleStepper};
 use thm_coupling::verification::{WaterAir, water_air};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 
 use crate::run::config::TimeControl;
 use crate::run::error::{ConfigError, RunError};
+use crate::run::profiles::Profile;
 use crate::run::scenario::{FrameSink, Scenario};
 use crate::run::summary::SummaryRow;
 use crate::run::units::{Pressure, Quantity};
@@ -72,6 +75,8 @@ pub struct PoreScaleBar {
     stepper: PoreScaleStepper<WaterAir>,
     /// Cells on the vertical centreline, by height.
     centre: Vec<usize>,
+    /// The equivalent bar of A-Eq. 63 on the initial state (the profiles' reference).
+    equivalent: EquivalentMedium,
     // Frame buffers.
     cell_pressure: Vec<f64>,
     cell_fraction: Vec<f64>,
@@ -191,12 +196,14 @@ impl Scenario for PoreScaleBar {
         let stepper = PoreScaleStepper::new(config, water_air(), &state)
             .map_err(|e| ConfigError::new("bar", e.to_string()))?;
         let centre = Self::sorted_centre(&state);
+        let equivalent = EquivalentMedium::of(&state, &params.heat);
         Ok((
             Self {
                 case,
                 params,
                 stepper,
                 centre,
+                equivalent,
                 cell_pressure: Vec::new(),
                 cell_fraction: Vec::new(),
                 cell_liquid_density: Vec::new(),
@@ -388,5 +395,70 @@ impl Scenario for PoreScaleBar {
                 reference: paper(k),
             })
             .collect()
+    }
+
+    fn profiles(&self, state: &PoreScaleState, time: f64) -> Vec<Profile> {
+        let mesh = &state.mesh.mesh;
+        let y: Vec<f64> = self
+            .centre
+            .iter()
+            .map(|&c| mesh.cell_centroid[c][1])
+            .collect();
+        let reference = match self.case {
+            BarCase::Cooling => {
+                Some(("equivalent bar of A-Eq. 63 (A-Eqs. 60-61)".to_string(), 0.0))
+            }
+            BarCase::Advection { .. } => Some((
+                "equivalent bar of A-Eq. 63 with advection at the mean flux so far".to_string(),
+                mean_mass_flux(state),
+            )),
+            BarCase::ContractionFixed => None,
+        }
+        // At t = 0 the reference is the initial state itself.
+        .filter(|_| time > 0.0)
+        .map(|(label, q_m)| {
+            let values = y
+                .iter()
+                .map(|&yy| self.equivalent.temperature(self.case, yy, time, q_m))
+                .collect();
+            (label, values)
+        });
+        // The centreline x = W/2: every cell it crosses, and the fluid cells among them.
+        let temperature = Profile {
+            name: "centreline_temperature".into(),
+            x_label: "y [m]".into(),
+            y_label: "T [K]".into(),
+            x: y,
+            y: self
+                .centre
+                .iter()
+                .map(|&c| state.heat.temperature[c])
+                .collect(),
+            reference,
+        };
+        let mut pore_of_cell = vec![usize::MAX; mesh.n_cells()];
+        for (p, &c) in self.stepper.network().pore_cell().iter().enumerate() {
+            pore_of_cell[c as usize] = p;
+        }
+        let (xs, ps): (Vec<f64>, Vec<f64>) = self
+            .centre
+            .iter()
+            .filter(|&&c| pore_of_cell[c] != usize::MAX)
+            .map(|&c| {
+                (
+                    mesh.cell_centroid[c][1],
+                    state.flow.pressure[pore_of_cell[c]],
+                )
+            })
+            .unzip();
+        let pressure = Profile {
+            name: "centreline_pore_pressure".into(),
+            x_label: "y [m]".into(),
+            y_label: "p [Pa]".into(),
+            x: xs,
+            y: ps,
+            reference: None,
+        };
+        vec![temperature, pressure]
     }
 }
