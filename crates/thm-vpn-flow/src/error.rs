@@ -175,6 +175,63 @@ pub enum FlowError {
         /// The pore that set the limit.
         pore: usize,
     },
+    /// The pore mesh of a permeability test could not be built.
+    #[error("pore mesh: {0}")]
+    Mesh(#[from] thm_vpn_mesh::MeshError),
+    /// The direct steady-state solve met a non-positive pivot (a pore cluster without a
+    /// conducting path to a boundary that the ordering did not exclude).
+    #[error("steady solve: matrix not positive definite at row {row} (pivot {pivot:e})")]
+    SteadySolve {
+        /// Row of the ordered matrix.
+        row: usize,
+        /// The pivot.
+        pivot: f64,
+    },
+    /// A packing of a permeability calibration has no pore path between the reservoirs.
+    #[error("packing {seed}: no pore path joins the two reservoirs (permeability 0)")]
+    NoPorePath {
+        /// The packing seed.
+        seed: u64,
+    },
+    /// A calibration target that no γ in `(0, 1]` searched reaches.
+    #[error(
+        "calibration: no T2T reduction factor gamma in [{lower:e}, {upper:e}] gives \
+         `{field}` = {target:e} m^2; the permeabilities reached span [{reached_min:e}, \
+         {reached_max:e}] m^2"
+    )]
+    CalibrationUnreachable {
+        /// The target's name.
+        field: &'static str,
+        /// The target value.
+        target: f64,
+        /// Smallest γ searched.
+        lower: f64,
+        /// Largest γ searched.
+        upper: f64,
+        /// Smallest permeability reached \[m²\].
+        reached_min: f64,
+        /// Largest permeability reached \[m²\].
+        reached_max: f64,
+    },
+    /// A calibration that brackets its target but does not meet the tolerance.
+    #[error(
+        "calibration: `{field}` = {target:e} not reached within a relative tolerance of \
+         {tolerance:e} in {iterations} evaluations (last gamma = {gamma:e} gave {value:e})"
+    )]
+    CalibrationNotConverged {
+        /// The target's name.
+        field: &'static str,
+        /// The target value.
+        target: f64,
+        /// The relative tolerance asked for.
+        tolerance: f64,
+        /// Evaluations done.
+        iterations: usize,
+        /// The last γ.
+        gamma: f64,
+        /// κ there \[m²\].
+        value: f64,
+    },
     /// The sparse solve of the implicit pressure step failed.
     #[error("step {step}: implicit pressure solve failed: {message}")]
     Solver {

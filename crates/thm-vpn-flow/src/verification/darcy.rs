@@ -45,13 +45,15 @@
 //! for packing 1 (a row) and for every packing within that band (notes, with their median).
 
 use super::{TEMPERATURE, WATER_VISCOSITY, err, water_air};
+use crate::permeability::{
+    self, DarcyTest, PermeabilityCalibration, SteadyFlow, calibrate_t2t_factor,
+};
 use crate::{
     BoundaryCondition, FlowConfig, FlowParameters, FlowState, FlowStepper, LinearLiquidIdealGas,
     Network, Phase, PoreFluid,
 };
 use thm_verify::{CaseError, CaseOutput, Row};
-use thm_vpn_mesh::packing::{PackingSpec, overlap_contacts, random_packing};
-use thm_vpn_mesh::{BoundarySide, MeshParams, Outline, PoreMesh, mesh_packing};
+use thm_vpn_mesh::{BoundarySide, PoreMesh};
 
 pub(super) const P_TOP: f64 = 0.1e6;
 pub(super) const P_BOTTOM: f64 = 5.0e6;
@@ -63,8 +65,6 @@ pub(super) const BAR_WIDTH: f64 = 0.02;
 const PAPER_GAMMA: f64 = 0.0115;
 /// κ of A-Sect. 3.2 and Table 1 [m²].
 const PAPER_KAPPA: f64 = 2.47e-16;
-/// Boundary resolution of the mesher (as the mesh crate's own bar case).
-const SEGMENTS_PER_CIRCLE: u32 = 32;
 /// The packing the single-packing numbers refer to, and the ensemble for the spread.
 const MAIN_SEED: u64 = 1;
 const ENSEMBLE_SEEDS: std::ops::RangeInclusive<u64> = 1..=12;
@@ -74,378 +74,53 @@ const LAMINAR_REYNOLDS: f64 = 1000.0;
 
 /// The two boundary conditions of A-Sect. 3.2 (group 0: top, group 1: bottom).
 pub(super) fn water_reservoirs() -> [(BoundarySide, BoundaryCondition); 2] {
-    let water = |pressure| BoundaryCondition::Pressure {
-        pressure,
-        temperature: TEMPERATURE,
-        entering_liquid_fraction: 1.0,
-    };
-    [
-        (BoundarySide::Top, water(P_TOP)),
-        (BoundarySide::Bottom, water(P_BOTTOM)),
-    ]
+    DarcyTest::paper_a().reservoirs()
 }
 
 /// A-Eq. 56 with the bar's dimensions: κ from the volumetric rate `q` [m³/s] through a bar
 /// of the given thickness.
 pub(super) fn kappa_of_rate(q: f64, thickness: f64) -> f64 {
-    q * WATER_VISCOSITY * BAR_HEIGHT / (BAR_WIDTH * thickness * (P_BOTTOM - P_TOP))
+    DarcyTest::paper_a().kappa_of_rate(q, BAR_HEIGHT, BAR_WIDTH, thickness)
 }
 
-/// The paper's bar for packing `seed` with T2T reduction factor `gamma`: the mesh and its
-/// network with the boundary conditions of A-Sect. 3.2 (boundary links use the same γ).
+/// The paper's bar for packing `seed` with T2T reduction factor `gamma`
+/// ([`DarcyTest::paper_bar`]).
 fn paper_bar(seed: u64, gamma: f64) -> Result<(PoreMesh, Network), CaseError> {
-    let spec = PackingSpec::paper_bar(seed);
-    let circles = random_packing(&spec);
-    // At rest: σ_n = 0 on every contact (stiffness 0 in the stand-in stress law), so
-    // A-Eq. 8 gives the zero-stress aperture β h_0.
-    let contacts = overlap_contacts(&circles, 0.0);
-    let mut params = MeshParams::new(
-        Outline::Box {
-            min: spec.box_min,
-            max: spec.box_max,
-        },
-        SEGMENTS_PER_CIRCLE,
-    );
-    params.t2t_reduction_factor = gamma;
-    let settings = params.validate().map_err(CaseError::from_display)?;
-    let packing_mesh =
-        mesh_packing(&circles, &contacts, &settings).map_err(CaseError::from_display)?;
-    let net = Network::from_mesh(&packing_mesh.mesh, &water_reservoirs(), gamma).map_err(err)?;
-    Ok((packing_mesh.mesh, net))
-}
-
-/// A steady single-phase liquid flow through a network.
-pub(super) struct SteadyFlow {
-    /// Pore pressures [Pa]; pores no boundary reaches are set to the top pressure (they
-    /// carry no flow).
-    pub pressure: Vec<f64>,
-    /// Rate into the domain through each boundary group (mass rates [kg/s] for the
-    /// compressible solve, volumetric rates [m³/s] for the incompressible one).
-    pub group_rate: Vec<f64>,
-    /// Whether a pore path joins a link of group 0 to a link of group 1.
-    pub percolates: bool,
-}
-
-/// Pores connected through channels of non-zero aperture to a boundary link, and whether a
-/// path joins group 0 to group 1.
-fn connected_to_boundary(net: &Network) -> (Vec<bool>, bool) {
-    let parts = net.parts();
-    let n = net.n_pores();
-    let mut reached_from = vec![u32::MAX; n];
-    let mut percolates = false;
-    for start_group in 0..2u32 {
-        let mut seen = vec![false; n];
-        let mut stack: Vec<usize> = parts
-            .link_pore
-            .iter()
-            .zip(&parts.link_group)
-            .filter(|(_, g)| **g == start_group)
-            .map(|(p, _)| *p as usize)
-            .collect();
-        while let Some(p) = stack.pop() {
-            if seen[p] {
-                continue;
-            }
-            seen[p] = true;
-            if start_group == 1 && reached_from[p] == 0 {
-                percolates = true;
-            }
-            reached_from[p] = reached_from[p].min(start_group);
-            for &e in net.pore_channels(p) {
-                let c = (e & !crate::SECOND_END) as usize;
-                if parts.channel_aperture[c] <= 0.0 {
-                    continue;
-                }
-                let [a, b] = parts.channel_pores[c];
-                let q = if a as usize == p { b } else { a } as usize;
-                if !seen[q] {
-                    stack.push(q);
-                }
-            }
-        }
-    }
-    let active = reached_from.iter().map(|&r| r != u32::MAX).collect();
-    (active, percolates)
-}
-
-/// `Σ x_k y_k` with four partial sums (in a fixed order).
-fn dot(x: &[f64], y: &[f64]) -> f64 {
-    let mut acc = [0.0; 4];
-    let (xc, yc) = (x.chunks_exact(4), y.chunks_exact(4));
-    let tail: f64 = xc
-        .remainder()
-        .iter()
-        .zip(yc.remainder())
-        .map(|(a, b)| a * b)
-        .sum();
-    for (a, b) in xc.zip(yc) {
-        for k in 0..4 {
-            acc[k] += a[k] * b[k];
-        }
-    }
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
-}
-
-/// The pores marked `active`, in breadth-first (Cuthill–McKee) order from the pores of the
-/// group-1 links (other components follow from their lowest pore): neighbours end up close
-/// in the order, so the matrix has a narrow envelope.
-fn breadth_first_order(net: &Network, active: &[bool]) -> Vec<usize> {
-    let parts = net.parts();
-    let n = net.n_pores();
-    let mut seen = vec![false; n];
-    let mut order = Vec::with_capacity(n);
-    let mut seeds: Vec<usize> = parts
-        .link_pore
-        .iter()
-        .zip(&parts.link_group)
-        .filter(|(_, g)| **g == 1)
-        .map(|(p, _)| *p as usize)
-        .collect();
-    seeds.extend((0..n).filter(|&p| active[p]));
-    for seed in seeds {
-        if seen[seed] {
-            continue;
-        }
-        seen[seed] = true;
-        let mut head = order.len();
-        order.push(seed);
-        while head < order.len() {
-            let p = order[head];
-            head += 1;
-            for &e in net.pore_channels(p) {
-                let [a, b] = parts.channel_pores[(e & !crate::SECOND_END) as usize];
-                let q = if a as usize == p { b } else { a } as usize;
-                if !seen[q] {
-                    seen[q] = true;
-                    order.push(q);
-                }
-            }
-        }
-    }
-    order
-}
-
-/// Solves `A x = b` for a symmetric positive definite `A` (row-major `m × m`, non-zero in
-/// row `i` only from column `first[i]` to the diagonal) by Cholesky factorisation within the
-/// envelope (the factor has the same envelope; the lower triangle of `a` is overwritten);
-/// `b` becomes `x`.
-fn envelope_cholesky_solve(
-    a: &mut [f64],
-    m: usize,
-    first: &[usize],
-    b: &mut [f64],
-) -> Result<(), CaseError> {
-    for i in 0..m {
-        for j in first[i]..i {
-            let lo = first[i].max(first[j]);
-            let s = a[i * m + j] - dot(&a[i * m + lo..i * m + j], &a[j * m + lo..j * m + j]);
-            a[i * m + j] = s / a[j * m + j];
-        }
-        let row = &a[i * m + first[i]..i * m + i];
-        let d = a[i * m + i] - dot(row, row);
-        if d.is_nan() || d <= 0.0 {
-            return Err(CaseError(format!(
-                "steady solve: matrix not positive definite at row {i} (pivot {d:e})"
-            )));
-        }
-        a[i * m + i] = d.sqrt();
-    }
-    for i in 0..m {
-        let f = first[i];
-        b[i] = (b[i] - dot(&a[i * m + f..i * m + i], &b[f..i])) / a[i * m + i];
-    }
-    for i in (0..m).rev() {
-        b[i] /= a[i * m + i];
-        let xi = b[i];
-        for k in first[i]..i {
-            b[k] -= a[i * m + k] * xi;
-        }
-    }
-    Ok(())
-}
-
-/// Group pressures of the prescribed-pressure conditions (0 for others).
-fn group_pressure(net: &Network, g: usize) -> f64 {
-    match net.parts().boundaries[g] {
-        BoundaryCondition::Pressure { pressure, .. } => pressure,
-        _ => 0.0,
-    }
-}
-
-/// Liquid density at a pressure [Pa] (for the mass balance of the stepper's steady state).
-type Density<'a> = &'a dyn Fn(f64) -> Result<f64, CaseError>;
-
-/// Single-phase steady flow with Poiseuille conductances `w h³/(12 μ L)` (A-Eq. 10). Without
-/// `density` a volume balance (incompressible); with it the mass balance with the density at
-/// the upwind pressure of every channel and link (the reservoir's for water entering),
-/// by Picard iteration from the incompressible solution.
-fn steady_flow(
-    net: &Network,
-    viscosity: f64,
-    density: Option<Density<'_>>,
-) -> Result<SteadyFlow, CaseError> {
-    let parts = net.parts();
-    let n = net.n_pores();
-    let w = net.width();
-    let conductance = |h: f64, l: f64| w * h * h * h / (12.0 * viscosity * l);
-    let (active, percolates) = connected_to_boundary(net);
-    let index = breadth_first_order(net, &active);
-    let mut slot = vec![usize::MAX; n];
-    for (k, &p) in index.iter().enumerate() {
-        slot[p] = k;
-    }
-    let m = index.len();
-    // Envelope of the matrix in this order: the first column of each row.
-    let mut first: Vec<usize> = (0..m).collect();
-    for &[i, j] in &parts.channel_pores {
-        let (si, sj) = (slot[i as usize], slot[j as usize]);
-        if si != usize::MAX {
-            let (lo, hi) = (si.min(sj), si.max(sj));
-            first[hi] = first[hi].min(lo);
-        }
-    }
-    // Densities change by ΔP/K ≈ 2·10⁻³ across the bar: each pass gains about that factor,
-    // so a few passes reach round-off.
-    let max_passes = if density.is_some() { 8 } else { 1 };
-    let mut passes = 0;
-    let weight = |pass: usize, upwind_pressure: f64| match density {
-        Some(rho) if pass > 0 => rho(upwind_pressure),
-        _ => Ok(1.0),
-    };
-    let mut pressure = vec![P_TOP; n];
-    let mut a = vec![0.0; m * m];
-    let mut b = vec![0.0; m];
-    while passes < max_passes {
-        let pass = passes;
-        passes += 1;
-        a.fill(0.0);
-        b.fill(0.0);
-        for c in 0..net.n_channels() {
-            let [i, j] = parts.channel_pores[c];
-            let (i, j) = (i as usize, j as usize);
-            if !active[i] {
-                continue;
-            }
-            let k = conductance(parts.channel_aperture[c], parts.channel_length[c])
-                * weight(pass, pressure[i].max(pressure[j]))?;
-            let (si, sj) = (slot[i], slot[j]);
-            a[si * m + si] += k;
-            a[sj * m + sj] += k;
-            a[si * m + sj] -= k;
-            a[sj * m + si] -= k;
-        }
-        for l in 0..net.n_links() {
-            let p = parts.link_pore[l] as usize;
-            let pb = group_pressure(net, parts.link_group[l] as usize);
-            let k = conductance(parts.link_aperture[l], parts.link_length[l])
-                * weight(pass, pb.max(pressure[p]))?;
-            let s = slot[p];
-            a[s * m + s] += k;
-            b[s] += k * pb;
-        }
-        envelope_cholesky_solve(&mut a, m, &first, &mut b)?;
-        let mut change: f64 = 0.0;
-        for (k, &p) in index.iter().enumerate() {
-            change = change.max((pressure[p] - b[k]).abs());
-            pressure[p] = b[k];
-        }
-        if pass > 0 && change <= 1e-14 * P_BOTTOM {
-            break;
-        }
-    }
-    let mut group_rate = vec![0.0; net.n_groups()];
-    for l in 0..net.n_links() {
-        let p = parts.link_pore[l] as usize;
-        let g = parts.link_group[l] as usize;
-        let pb = group_pressure(net, g);
-        let k = conductance(parts.link_aperture[l], parts.link_length[l])
-            * weight(passes, pb.max(pressure[p]))?;
-        group_rate[g] += k * (pb - pressure[p]);
-    }
-    Ok(SteadyFlow {
-        pressure,
-        group_rate,
-        percolates,
-    })
+    DarcyTest::paper_a().paper_bar(seed, gamma).map_err(err)
 }
 
 /// Incompressible steady flow: `group_rate` are volumetric rates [m³/s].
 pub(super) fn incompressible_steady_flow(net: &Network) -> Result<SteadyFlow, CaseError> {
-    steady_flow(net, WATER_VISCOSITY, None)
+    permeability::incompressible_steady_flow(net, WATER_VISCOSITY).map_err(err)
 }
 
 /// The stepper's steady state for a saturated network: the liquid mass balance with upwind
 /// densities (reservoir density for water entering through a link); `group_rate` are mass
 /// rates [kg/s].
 fn stepper_steady_flow(net: &Network, fluid: &impl PoreFluid) -> Result<SteadyFlow, CaseError> {
-    let rho = |p: f64| {
-        fluid
-            .density(Phase::Liquid, p, TEMPERATURE)
-            .map_err(CaseError::from_display)
-    };
-    steady_flow(net, WATER_VISCOSITY, Some(&rho))
+    let rho = |p: f64| fluid.density(Phase::Liquid, p, TEMPERATURE);
+    permeability::steady_flow(net, WATER_VISCOSITY, Some(&rho)).map_err(err)
 }
 
 /// κ of the paper's bar for packing `seed` and reduction factor `gamma` (incompressible
 /// steady flow, volumetric rate through the bottom edge), and whether it percolates.
 fn bar_kappa(seed: u64, gamma: f64) -> Result<(f64, bool), CaseError> {
-    let (mesh, net) = paper_bar(seed, gamma)?;
-    let steady = incompressible_steady_flow(&net)?;
-    Ok((
-        kappa_of_rate(steady.group_rate[1], mesh.thickness),
-        steady.percolates,
-    ))
+    let k = DarcyTest::paper_a()
+        .bar_permeability(seed, gamma)
+        .map_err(err)?;
+    Ok((k.kappa, k.percolates))
 }
 
-/// The γ at which κ of packing `seed` equals `target`: the root of
-/// `f(x) = ln κ(eˣ) − ln target` (κ grows monotonically with γ) by the Illinois variant of
-/// regula falsi, from a bracket widened by factors of 2 around the paper's γ.
+/// The γ at which κ of packing `seed` equals `target` ([`calibrate_t2t_factor`] on that
+/// packing alone, to round-off).
 fn fit_gamma(seed: u64, target: f64) -> Result<f64, CaseError> {
-    let f = |x: f64| -> Result<f64, CaseError> { Ok((bar_kappa(seed, x.exp())?.0 / target).ln()) };
-    let (mut lo, mut hi) = (PAPER_GAMMA.ln(), PAPER_GAMMA.ln());
-    let (mut f_lo, mut f_hi) = (f(lo)?, f(hi)?);
-    let mut widenings = 0;
-    while f_lo > 0.0 || f_hi < 0.0 {
-        widenings += 1;
-        if widenings > 20 {
-            return Err(CaseError(format!(
-                "no γ in [{:e}, {:e}] gives κ = {target:e} (the S2S channels may limit it)",
-                lo.exp(),
-                hi.exp()
-            )));
-        }
-        if f_lo > 0.0 {
-            lo -= 2f64.ln();
-            f_lo = f(lo)?;
-        } else {
-            hi += 2f64.ln();
-            f_hi = f(hi)?;
-        }
-    }
-    let mut side = 0;
-    for _ in 0..100 {
-        let x = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
-        let fx = f(x)?;
-        if fx.abs() <= 1e-12 || hi - lo <= 1e-12 {
-            return Ok(x.exp());
-        }
-        if fx < 0.0 {
-            lo = x;
-            f_lo = fx;
-            if side == -1 {
-                f_hi *= 0.5;
-            }
-            side = -1;
-        } else {
-            hi = x;
-            f_hi = fx;
-            if side == 1 {
-                f_lo *= 0.5;
-            }
-            side = 1;
-        }
-    }
-    Err(CaseError("γ fit did not converge in 100 iterations".into()))
+    let cal = PermeabilityCalibration {
+        target_permeability: target,
+        seeds: vec![seed],
+        relative_tolerance: 1e-12,
+        ..PermeabilityCalibration::paper_a()
+    };
+    Ok(calibrate_t2t_factor(&cal).map_err(err)?.gamma())
 }
 
 /// `d ln κ / d ln γ` between `gamma` and `2 gamma` for packing `seed`.
