@@ -75,6 +75,49 @@ pub enum DemError {
         /// What went wrong.
         reason: String,
     },
+    /// A calibration target that no parameter within the search range reaches.
+    #[error(
+        "calibration: no {parameter} in [{lower:e}, {upper:e}] gives `{field}` = {target:e}; \
+         the values reached span [{reached_min:e}, {reached_max:e}]"
+    )]
+    CalibrationUnreachable {
+        /// The target's name (the key a user gives it by).
+        field: &'static str,
+        /// The target value.
+        target: f64,
+        /// The parameter searched.
+        parameter: &'static str,
+        /// Lower end of the parameter's search range.
+        lower: f64,
+        /// Upper end of the parameter's search range.
+        upper: f64,
+        /// Smallest value of the target quantity reached.
+        reached_min: f64,
+        /// Largest value of the target quantity reached.
+        reached_max: f64,
+    },
+    /// A calibration that brackets its target but does not meet the tolerance.
+    #[error(
+        "calibration: `{field}` = {target:e} not reached within a relative tolerance of \
+         {tolerance:e} in {iterations} iterations (last {parameter} = {parameter_value:e} gave \
+         {value:e})"
+    )]
+    CalibrationNotConverged {
+        /// The target's name.
+        field: &'static str,
+        /// The target value.
+        target: f64,
+        /// The relative tolerance asked for.
+        tolerance: f64,
+        /// Iterations done.
+        iterations: usize,
+        /// The parameter searched.
+        parameter: &'static str,
+        /// Its last value.
+        parameter_value: f64,
+        /// The target quantity at that value.
+        value: f64,
+    },
 }
 
 pub(crate) use crate::validate::{check_positive, check_range};

@@ -87,6 +87,9 @@
 //! = 29.3 mm²`); the "40–45 spheres" of the specimen description correspond to 18–27 %.
 //! [`verification::cases`] holds the two-sphere restitution, the bond threshold and the
 //! uniaxial tension test of A-Sect. 3.1 (see its notes for the comparison with the paper).
+//! [`calibration::calibrate_bond_strength`] finds the bond tensile strength `T` (with `C/T`
+//! fixed) for which the mean strength of the seeded bars equals a target, as A-Sect. 3
+//! calibrates the DEM against the measured 8.8 MPa.
 //!
 //! ## Validity
 //!
@@ -121,6 +124,7 @@
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod calibration;
 pub mod contact;
 pub mod error;
 pub mod neighbour;

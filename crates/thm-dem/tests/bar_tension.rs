@@ -189,3 +189,55 @@ fn plates_stop_at_the_end_strain_and_hold() {
     // Below the break strain (0.30 %): the bonds hold, the stress is positive.
     assert!(state.bond_breaks.is_empty() && s.stress > 0.0);
 }
+
+/// The post-peak reload of packing 3 with A-Table 1's bond strengths (module docs of
+/// `thm_dem::verification`): after the first drop the stress climbs again, and wherever it
+/// does a path of intact bonds (a ligament the first crack left) still joins the two grips.
+#[test]
+fn the_post_peak_reload_is_carried_by_an_intact_ligament() {
+    use thm_dem::packing::{PackingParams, random_packing};
+    use thm_dem::verification::GENERATOR_POROSITY;
+    let params = PackingParams {
+        bond_gap: 4e-3,
+        porosity: GENERATOR_POROSITY,
+        ..PackingParams::paper_a_bar(3)
+    };
+    let (packing, _) = random_packing(&params, 2600.0).unwrap();
+    let law = CohesiveFrictionalParams::paper_a_table_1()
+        .validate()
+        .unwrap();
+    let (y0, y1) = (params.box_min[1], params.box_max[1]);
+    let width = params.box_max[0] - params.box_min[0];
+    let (mut bar, mut state) =
+        BarTension::new(&packing, law, 2600.0, &BarLoading::paper_a(), y0, y1, width).unwrap();
+    let mut peak: f64 = 0.0;
+    // Lowest stress after the first drop (below half the peak).
+    let mut trough = f64::INFINITY;
+    let mut reload: f64 = 0.0;
+    let mut strain = 0.0;
+    while strain < 0.0035 {
+        let s = bar.step(&mut state).unwrap();
+        strain = s.strain;
+        if trough.is_infinite() {
+            peak = peak.max(s.stress);
+            if s.stress < 0.5 * peak {
+                trough = s.stress;
+            }
+            continue;
+        }
+        trough = trough.min(s.stress);
+        if s.stress > trough + 0.2 * peak {
+            reload = reload.max(s.stress);
+            assert!(
+                bar.grips_bonded(&state),
+                "{:e} Pa at strain {strain:e} with no intact path between the grips",
+                s.stress
+            );
+        }
+    }
+    assert!(trough.is_finite(), "no drop");
+    assert!(
+        reload > trough + 0.2 * peak,
+        "no reload: trough {trough:e}, reload {reload:e}, peak {peak:e}"
+    );
+}

@@ -489,7 +489,7 @@ fn group_pressure(net: &Network, g: usize) -> f64 {
     }
 }
 
-/// Liquid density at a pressure [Pa] (for the mass balance of the stepper's steady state).
+/// Liquid density at a pressure \[Pa\] (for the mass balance of the stepper's steady state).
 pub type Density<'a> = &'a dyn Fn(f64) -> Result<f64, ClosureFailure>;
 
 /// Single-phase steady flow with Poiseuille conductances `w h³/(12 μ L)` (A-Eq. 10). Without
