@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod calibrate;
 mod eos;
 mod run;
 
@@ -21,6 +22,9 @@ enum Command {
     Eos(eos::EosCommand),
     /// Run a scenario file: histories, ParaView series, checkpoints and a summary.
     Run(run::RunArgs),
+    /// Calibrate the bond strengths (T, C = 5 T) and the T2T factor γ for a tensile strength
+    /// and a permeability, as A-Sect. 3 (defaults: the paper's 8.8 MPa and 2.47e-16 m^2).
+    Calibrate(calibrate::CalibrateArgs),
 }
 
 fn main() -> ExitCode {
@@ -28,5 +32,6 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Eos(command) => eos::run(command),
         Command::Run(args) => run::run(&args),
+        Command::Calibrate(args) => calibrate::run(&args),
     }
 }
