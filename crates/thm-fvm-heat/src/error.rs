@@ -54,11 +54,10 @@ pub enum HeatError {
         /// The offending value.
         value: f64,
     },
-    /// A face whose normal and centroid-to-centroid direction are (nearly) perpendicular: the
-    /// two-point flux of A-Eq. 47 is undefined there.
-    #[error(
-        "face {face}: cos(angle between normal and centroid link) = {cosine}, must be > {minimum}"
-    )]
+    /// A face whose centroid link is not finite (coincident centroids or non-finite
+    /// coordinates); links that are merely nearly parallel use the minimum correction (see
+    /// `HeatGeometry::sliver_faces`).
+    #[error("face {face}: cos(angle between normal and centroid link) = {cosine} is not finite")]
     DegenerateFace {
         /// Face index.
         face: usize,

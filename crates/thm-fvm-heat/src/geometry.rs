@@ -132,6 +132,10 @@ pub(crate) struct BoundaryFace {
 #[derive(Debug, Clone, Default)]
 pub struct HeatGeometry {
     n_cells: usize,
+    // Interior faces whose centroid link is nearly parallel to the face (minimum correction).
+    sliver_faces: usize,
+    // Per cell: factor on ρ_s c_s V of a solid cell (empty: 1 everywhere).
+    pub(crate) solid_capacity_scale: Vec<f64>,
     n_faces: usize,
     n_channels: usize,
     pub(crate) face: Vec<FaceGeometry>,
@@ -179,6 +183,55 @@ impl HeatGeometry {
     /// Number of cells, faces and channels of the mesh this geometry was built for.
     pub fn sizes(&self) -> [usize; 3] {
         [self.n_cells, self.n_faces, self.n_channels]
+    }
+
+    /// Interior faces whose centroid link is nearly parallel to the face (cos ≤
+    /// [`MIN_FACE_COSINE`], sliver triangles between nearly touching circles): their
+    /// conduction uses the minimum-correction two-point flux `λ A cos / |d|` without the
+    /// cross term of A-Eq. 47.
+    pub fn sliver_faces(&self) -> usize {
+        self.sliver_faces
+    }
+
+    /// Scales the heat capacity `ρ_s c_s V` of every solid cell by `per_sphere[owner]`, e.g.
+    /// so that a sphere whose cross-section shrank with its temperature (A-Eq. 55) keeps the
+    /// heat capacity of its unchanged mass. Errors when a cell's owner has no entry or a
+    /// factor is not finite and positive. [`HeatGeometry::new`] starts with 1 everywhere.
+    pub fn set_solid_capacity_scale(
+        &mut self,
+        mesh: &PoreMesh,
+        per_sphere: &[f64],
+    ) -> Result<(), HeatError> {
+        if let Some((k, &f)) = per_sphere
+            .iter()
+            .enumerate()
+            .find(|(_, f)| !(f.is_finite() && **f > 0.0))
+        {
+            return Err(HeatError::InputOutOfRange {
+                quantity: "solid capacity scale of sphere",
+                index: k,
+                range: "finite and > 0",
+                value: f,
+            });
+        }
+        self.solid_capacity_scale.clear();
+        for (c, kind) in mesh.cell_kind.iter().enumerate() {
+            let f = match *kind {
+                CellKind::Solid { owner } => {
+                    *per_sphere
+                        .get(owner as usize)
+                        .ok_or(HeatError::InputOutOfRange {
+                            quantity: "solid capacity scale: owner of cell",
+                            index: c,
+                            range: "an owner below the number of factors",
+                            value: f64::from(owner),
+                        })?
+                }
+                CellKind::Fluid => 1.0,
+            };
+            self.solid_capacity_scale.push(f);
+        }
+        Ok(())
     }
 
     /// Mesh porosity: fluid area / total area.
@@ -450,8 +503,11 @@ impl HeatGeometry {
             bf.tangent = [r[0] - dn * n[0], r[1] - dn * n[1]];
             slot += 1;
         }
-        // Interior faces; a degenerate link is reported at the lowest face index.
-        let worst = self
+        // Interior faces. A link nearly parallel to its face (a sliver triangle, cos ≤
+        // MIN_FACE_COSINE) falls back to the minimum-correction two-point flux λ A cos/|d|
+        // with no cross term: bounded, conservative and monotone, and counted; a non-finite
+        // link is an error reported at the lowest face index.
+        let (worst, degenerate) = self
             .face
             .par_iter_mut()
             .with_min_len(GRAIN)
@@ -459,7 +515,7 @@ impl HeatGeometry {
             .map(|(f, geo)| {
                 let [c0, c1] = mesh.face_cells[f];
                 if c1 == NONE {
-                    return None;
+                    return (None, 0usize);
                 }
                 let (c0, c1) = (c0 as usize, c1 as usize);
                 let n = mesh.face_normal[f];
@@ -468,11 +524,11 @@ impl HeatGeometry {
                 let (x0, x1) = (mesh.cell_centroid[c0], mesh.cell_centroid[c1]);
                 let d = sub(x1, x0);
                 let ds = dot(d, d).sqrt();
-                let cos = if ds > 0.0 { dot(n, d) / ds } else { 0.0 };
-                // NaN-safe: anything not clearly above the minimum is degenerate.
-                if cos.is_nan() || cos <= MIN_FACE_COSINE {
-                    return Some((f, cos));
+                let cos = if ds > 0.0 { dot(n, d) / ds } else { f64::NAN };
+                if !cos.is_finite() {
+                    return (Some((f, cos)), 0);
                 }
+                let sliver = cos <= MIN_FACE_COSINE;
                 match geo {
                     FaceGeometry::Diffusive {
                         conductance,
@@ -480,11 +536,16 @@ impl HeatGeometry {
                         weight0,
                     } => {
                         let es = [d[0] / ds, d[1] / ds];
-                        *conductance = area / (ds * cos);
-                        *cross = [
-                            area * n[0] - es[0] * area / cos,
-                            area * n[1] - es[1] * area / cos,
-                        ];
+                        if sliver {
+                            *conductance = area * cos.max(0.0) / ds;
+                            *cross = [0.0, 0.0];
+                        } else {
+                            *conductance = area / (ds * cos);
+                            *cross = [
+                                area * n[0] - es[0] * area / cos,
+                                area * n[1] - es[1] * area / cos,
+                            ];
+                        }
                         let d0 = dot(sub(xf, x0), es).max(0.0);
                         let d1 = dot(sub(x1, xf), es).max(0.0);
                         // d0 + d1 ≥ (x1 − x0)·e_s = ds > 0 (the clamps only add).
@@ -492,10 +553,11 @@ impl HeatGeometry {
                     }
                     FaceGeometry::Interface { .. } | FaceGeometry::Boundary { .. } => {}
                 }
-                None
+                (None, usize::from(sliver))
             })
-            .reduce(|| None, |a, b| a.or(b));
-        // `reduce` keeps the left operand: the first (lowest) degenerate face.
+            .reduce(|| (None, 0), |a, b| (a.0.or(b.0), a.1 + b.1));
+        self.sliver_faces = degenerate;
+        // `reduce` keeps the left operand: the first (lowest) non-finite face.
         if let Some((face, cosine)) = worst {
             return Err(HeatError::DegenerateFace {
                 face,

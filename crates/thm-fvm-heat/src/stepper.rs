@@ -392,6 +392,7 @@ impl HeatStepper {
         let start = &geometry.cell_channel_start;
         let cell_channel = &geometry.cell_channel;
         let flags = &geometry.cell_flags;
+        let scale = &geometry.solid_capacity_scale;
         let ch = &mesh.channels;
         (
             self.capacity.par_chunks_mut(GRAIN),
@@ -418,7 +419,8 @@ impl HeatStepper {
                     let volume = area[i] * b;
                     let flag = flags[i];
                     if flag & CELL_FLUID == 0 {
-                        cap[i] = volume * solid.volumetric_heat_capacity();
+                        let f = scale.get(lo + i).copied().unwrap_or(1.0);
+                        cap[i] = volume * solid.volumetric_heat_capacity() * f;
                         lam[i] = solid.conductivity;
                         cp[i] = solid.specific_heat;
                         continue;

@@ -441,3 +441,72 @@ fn bad_inputs_and_instability_are_typed_errors() {
         "{err:?}"
     );
 }
+
+/// A sliver: a 1 × 1e-4 strip of four cells split along diagonals, whose centroid links
+/// make cos ≈ 2e-4 with the diagonal faces. The geometry takes the minimum-correction flux
+/// there (counted), and a step still conserves Σ C T to round-off and makes no new extremum.
+#[test]
+fn sliver_faces_fall_back_to_a_bounded_conservative_flux() {
+    let mesh =
+        PoreMesh::structured_rectangle(4, 1, 4.0, 1e-4, 1.0, 1.0, |_| CellKind::Solid { owner: 0 })
+            .unwrap();
+    let params = unit_solid_params(Vec::new());
+    let model = HeatModel::new(&params, &mesh).unwrap();
+    assert!(HeatGeometry::new(&model, &mesh).unwrap().sliver_faces() >= 4);
+    let model = HeatModel::new(&params, &mesh).unwrap();
+    let geometry = HeatGeometry::new(&model, &mesh).unwrap();
+    let input = FlowInput::liquid_at_rest(&mesh, 1000.0, 1.0);
+    let mut state = HeatState::uniform(&mesh, 300.0);
+    for (c, t) in state.temperature.iter_mut().enumerate() {
+        *t = 300.0 + 2.5 * mesh.cell_centroid[c][0];
+    }
+    let energy = |s: &HeatState| -> f64 {
+        (0..mesh.n_cells())
+            .map(|c| mesh.cell_volume(c) * s.temperature[c])
+            .sum()
+    };
+    let (lo, hi) = (300.0, 310.0);
+    let e0 = energy(&state);
+    let mut stepper = HeatStepper::new();
+    stepper
+        .implicit_step(&model, &geometry, &mesh, &input, &mut state, 0.05)
+        .unwrap();
+    assert!(((energy(&state) - e0) / e0).abs() < 1e-12);
+    assert!(
+        state
+            .temperature
+            .iter()
+            .all(|&t| (lo - 1e-9..=hi + 1e-9).contains(&t))
+    );
+}
+
+/// The solid capacity scale multiplies ρ_s c_s V per owner: a sphere whose cells shrink to
+/// half their area with scale 2 keeps its heat capacity, so the same heat flux changes its
+/// temperature at the same rate.
+#[test]
+fn solid_capacity_scale_multiplies_the_owners_capacity() {
+    let mesh = solid_bar(4);
+    let params = unit_solid_params(Vec::new());
+    let model = HeatModel::new(&params, &mesh).unwrap();
+    let mut geometry = HeatGeometry::new(&model, &mesh).unwrap();
+    let input = FlowInput::liquid_at_rest(&mesh, 1000.0, 1.0);
+    let state = HeatState::uniform(&mesh, 300.0);
+    let mut stepper = HeatStepper::new();
+    stepper
+        .prepare(&model, &geometry, &mesh, &input, &state)
+        .unwrap();
+    let plain: Vec<f64> = stepper.heat_capacity().to_vec();
+    geometry.set_solid_capacity_scale(&mesh, &[2.0]).unwrap();
+    stepper
+        .prepare(&model, &geometry, &mesh, &input, &state)
+        .unwrap();
+    for (a, b) in plain.iter().zip(stepper.heat_capacity()) {
+        assert_eq!(2.0 * a, *b);
+    }
+    // Bad factors are errors naming the sphere.
+    let err = geometry
+        .set_solid_capacity_scale(&mesh, &[f64::NAN])
+        .unwrap_err();
+    assert!(err.to_string().contains("solid capacity scale"), "{err}");
+    assert!(geometry.set_solid_capacity_scale(&mesh, &[]).is_err());
+}
