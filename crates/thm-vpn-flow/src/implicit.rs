@@ -74,10 +74,15 @@ fn same_directions(network: &Network, a: &[f64], b: &[f64], tolerance: f64) -> b
     channels && links
 }
 
+/// The shortest implicit sub-step, as a fraction of the step: below it the step fails
+/// (a pore that no sub-step can keep positive and closed, e.g. a cell collapsing).
+pub const MIN_SUBSTEP_FRACTION: f64 = 1e-12;
+
 impl FlowStepper {
     /// Advances `state` by `dt` \[s\] with backward-Euler sub-steps (see the module doc): one
-    /// sub-step of `dt` unless it is rejected, then halved until it is accepted (at most
-    /// `max_substeps` tries in all). `dv_dt` as in [`Self::step`]. The report's
+    /// sub-step of `dt` unless it is rejected, then halved until it is accepted and doubled
+    /// again after each accepted one (at most `max_substeps` tries in all, none shorter than
+    /// [`MIN_SUBSTEP_FRACTION`] of `dt`). `dv_dt` as in [`Self::step`]. The report's
     /// `smallest_substep` is the shortest accepted sub-step.
     pub fn implicit_step(
         &mut self,
@@ -98,7 +103,7 @@ impl FlowStepper {
         };
         while remaining > 0.0 {
             h = h.min(remaining);
-            if tries >= max_tries {
+            if tries >= max_tries || h < MIN_SUBSTEP_FRACTION * dt {
                 return Err(FlowError::TooManySubsteps {
                     step: state.step,
                     substeps: report.substeps,
@@ -125,6 +130,8 @@ impl FlowStepper {
             }
             self.record_substep(network, state, &mut report, h);
             remaining = if h >= remaining { 0.0 } else { remaining - h };
+            // A rejection was local in time: try a longer sub-step again.
+            h *= 2.0;
         }
         state.step += 1;
         state.time += dt;
