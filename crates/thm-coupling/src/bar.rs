@@ -66,6 +66,10 @@ pub enum BarCase {
     },
     /// A-Sect. 6 case b: 80 % water / 20 % air at 100 kPa, 368.16 K, ends at 278.16 K, closed.
     ContractionFixed,
+    /// A-Sect. 6 case a: as case b, but only the spheres at both ends are held (displacement
+    /// and rotation); the others move under contact and fluid forces, shrink with A-Eq. 55,
+    /// and the bonds between them may break.
+    ContractionFree,
 }
 
 impl BarCase {
@@ -73,7 +77,7 @@ impl BarCase {
     pub fn initial_temperature(self) -> f64 {
         match self {
             BarCase::Cooling | BarCase::Advection { .. } => 323.16,
-            BarCase::ContractionFixed => 368.16,
+            BarCase::ContractionFixed | BarCase::ContractionFree => 368.16,
         }
     }
 
@@ -81,7 +85,7 @@ impl BarCase {
     pub fn end_temperature(self) -> f64 {
         match self {
             BarCase::Cooling | BarCase::Advection { .. } => 293.16,
-            BarCase::ContractionFixed => 278.16,
+            BarCase::ContractionFixed | BarCase::ContractionFree => 278.16,
         }
     }
 
@@ -92,7 +96,7 @@ impl BarCase {
                 pressure: TOP_PRESSURE,
                 liquid_fraction: 1.0,
             },
-            BarCase::ContractionFixed => InitialFluid {
+            BarCase::ContractionFixed | BarCase::ContractionFree => InitialFluid {
                 pressure: 1e5,
                 liquid_fraction: 0.8,
             },
@@ -166,7 +170,7 @@ pub fn bar_params(case: BarCase, segments: u32) -> PoreScaleParams {
                 condition: reservoir(TOP_PRESSURE),
             },
         ],
-        BarCase::ContractionFixed => {
+        BarCase::ContractionFixed | BarCase::ContractionFree => {
             heat.solid.conductivity = 420.0;
             heat.liquid.conductivity *= 10.0;
             heat.gas.conductivity *= 10.0;
@@ -175,7 +179,11 @@ pub fn bar_params(case: BarCase, segments: u32) -> PoreScaleParams {
         }
     };
     PoreScaleParams {
-        skeleton: Skeleton::Fixed,
+        skeleton: if case == BarCase::ContractionFree {
+            Skeleton::Free
+        } else {
+            Skeleton::Fixed
+        },
         dem: StepperParams {
             time_step: 2e-7,
             damping: 0.08,
@@ -194,7 +202,7 @@ pub fn bar_params(case: BarCase, segments: u32) -> PoreScaleParams {
         remesh: RemeshCriteriaParams::default(),
         flow: FlowParameters::default(),
         flow_scheme: FlowScheme::Implicit,
-        liquid_tension: case != BarCase::ContractionFixed,
+        liquid_tension: matches!(case, BarCase::Cooling | BarCase::Advection { .. }),
         flow_boundaries,
         boundary_reduction_factor: 0.0115,
         heat,
@@ -211,8 +219,33 @@ pub fn bar_state(
     fluid: &impl thm_vpn_flow::PoreFluid,
 ) -> Result<PoreScaleState, CouplingError> {
     let t0 = case.initial_temperature();
-    let dem = bar_packing(seed, t0)?;
+    let mut dem = bar_packing(seed, t0)?;
+    if case == BarCase::ContractionFree {
+        hold_ends(&mut dem);
+    }
     PoreScaleState::new(config, dem, fluid, case.initial_fluid(), |_| t0)
+}
+
+/// Spheres whose surface lies within this distance of a bar end are held in case a \[m\]
+/// (the grip depth of the tension test, `thm_dem::verification::BarLoading::paper_a`).
+pub const END_HOLD_DEPTH: f64 = 1e-3;
+
+/// Holds (displacement and rotation) the spheres whose surface lies within
+/// [`END_HOLD_DEPTH`] of either end: A-Sect. 6 case a, "fixed only at both ends" (A-Fig. 20a
+/// shows them black). Returns how many were held.
+pub fn hold_ends(dem: &mut DemState) -> usize {
+    let p = &mut dem.particles;
+    let mut held = 0;
+    for i in 0..p.len() {
+        let (y, r) = (p.position[i].y, p.radius[i]);
+        if y - r < END_HOLD_DEPTH || y + r > BAR_LENGTH - END_HOLD_DEPTH {
+            p.fixed[i] = true;
+            p.velocity[i] = Vec3::new(0.0, 0.0, 0.0);
+            p.angular_velocity[i] = Vec3::new(0.0, 0.0, 0.0);
+            held += 1;
+        }
+    }
+    held
 }
 
 /// Cells crossed by the vertical centreline x = W/2.

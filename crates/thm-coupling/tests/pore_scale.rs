@@ -378,3 +378,59 @@ fn pressure_boundaries_that_no_pore_path_joins_are_an_error_naming_them() {
     // Equal pressures drive nothing: no path needed.
     check_pressure_paths(&network(vec![[0, 1]], 2e5)).expect("equal pressures");
 }
+
+/// The remap leaves a new pore that no old fluid cell covered empty (space a shrinking sphere
+/// or an opening gap left): `fill_uncovered_pores` fills it from the pores its channels join,
+/// keeping each phase mass and the fluid energy to round-off and the donors' temperatures
+/// (energy over capacity) unchanged; a pore whose neighbours are empty too is filled in a
+/// later pass.
+#[test]
+fn uncovered_pores_are_filled_from_their_neighbours_conserving_mass_and_energy() {
+    let config = params(Skeleton::Fixed, RemeshCriteriaParams::default())
+        .validate()
+        .expect("params");
+    let s = state(&config);
+    let st = stepper(&config, &s);
+    let network = st.network();
+    let cells = s.mesh.mesh.n_cells();
+    let (mut mq, mut mp, mut ef) = (vec![0.0; cells], vec![0.0; cells], vec![0.0; cells]);
+    for (q, &c) in network.pore_cell().iter().enumerate() {
+        let c = c as usize;
+        mq[c] = s.flow.liquid_mass[q];
+        mp[c] = s.flow.gas_mass[q];
+        // Energy per unit mass that differs from pore to pore.
+        ef[c] = (mq[c] + mp[c]) * (1.0 + 0.01 * q as f64);
+    }
+    let parts = network.parts();
+    let [a, b] = parts.channel_pores[0].map(|p| p as usize);
+    let cell = |q: usize| network.pore_cell()[q] as usize;
+    for q in [a, b] {
+        mq[cell(q)] = 0.0;
+        mp[cell(q)] = 0.0;
+        ef[cell(q)] = 0.0;
+    }
+    let totals = |mq: &[f64], mp: &[f64], ef: &[f64]| {
+        [mq.iter().sum::<f64>(), mp.iter().sum(), ef.iter().sum()]
+    };
+    let before = totals(&mq, &mp, &ef);
+    let specific: Vec<f64> = (0..cells).map(|c| ef[c] / (mq[c] + mp[c])).collect();
+    let filled =
+        stages::fill_uncovered_pores(network, &s.flow.volume, [&mut mq, &mut mp, &mut ef], 0)
+            .expect("fill");
+    assert!(filled >= 2, "{filled}");
+    let after = totals(&mq, &mp, &ef);
+    for k in 0..3 {
+        assert!(((after[k] - before[k]) / before[k]).abs() < 1e-14, "{k}");
+    }
+    for q in 0..network.n_pores() {
+        let c = cell(q);
+        assert!(mq[c] > 0.0 && mp[c] > 0.0, "pore {q} still empty");
+        if q != a && q != b && specific[c].is_finite() {
+            let now = ef[c] / (mq[c] + mp[c]);
+            assert!(
+                (now - specific[c]).abs() <= 1e-12 * specific[c],
+                "donor {q}"
+            );
+        }
+    }
+}

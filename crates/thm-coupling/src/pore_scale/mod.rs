@@ -63,6 +63,7 @@ pub use params::{
 };
 pub use state::{
     InitialFluid, PoreScaleState, cell_capacities, circles_of, contact_normal_stress, contacts_of,
+    solid_capacity_scale, sphere_solid_areas,
 };
 
 use std::time::Instant;
@@ -271,6 +272,12 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             self.heat_geometry
                 .update_positions(&self.heat_model, &state.mesh.mesh)
                 .map_err(CouplingError::Heat)?;
+            self.heat_geometry
+                .set_solid_capacity_scale(
+                    &state.mesh.mesh,
+                    &solid_capacity_scale(&state.mesh.mesh, &state.solid_area_ref),
+                )
+                .map_err(CouplingError::Heat)?;
             lap(&mut seconds.mesh);
         }
         let FlowTransfer {
@@ -428,7 +435,10 @@ fn derived(
     .map_err(CouplingError::Flow)?;
     check_pressure_paths(&network)?;
     let model = HeatModel::new(&config.params.heat, mesh).map_err(CouplingError::Heat)?;
-    let geometry = HeatGeometry::new(&model, mesh).map_err(CouplingError::Heat)?;
+    let mut geometry = HeatGeometry::new(&model, mesh).map_err(CouplingError::Heat)?;
+    geometry
+        .set_solid_capacity_scale(mesh, &solid_capacity_scale(mesh, &state.solid_area_ref))
+        .map_err(CouplingError::Heat)?;
     Ok((network, model, geometry))
 }
 

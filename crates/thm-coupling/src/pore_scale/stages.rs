@@ -460,9 +460,19 @@ pub fn remesh(
         e_fluid[c] =
             fluid_capacity(mq[c], mp[c], heat_params) * (state.heat.temperature[c] - t_ref);
     }
+    let old_scale = super::state::solid_capacity_scale(old_mesh, &state.solid_area_ref);
+    let owner_scale = |scale: &[f64], kind: thm_vpn_mesh::CellKind| match kind {
+        thm_vpn_mesh::CellKind::Solid { owner } => {
+            scale.get(owner as usize).copied().unwrap_or(1.0)
+        }
+        thm_vpn_mesh::CellKind::Fluid => 1.0,
+    };
     for (c, e) in e_solid.iter_mut().enumerate() {
         if !old_mesh.cell_kind[c].is_fluid() {
-            *e = solid_rc * old_mesh.cell_volume(c) * (state.heat.temperature[c] - t_ref);
+            *e = solid_rc
+                * old_mesh.cell_volume(c)
+                * owner_scale(&old_scale, old_mesh.cell_kind[c])
+                * (state.heat.temperature[c] - t_ref);
         }
     }
     let remap = |filter, old: &[f64]| -> Result<Vec<f64>, CouplingError> {
@@ -479,10 +489,20 @@ pub fn remesh(
     );
     let new_network = Network::from_mesh(&new.mesh, boundaries, boundary_reduction_factor)
         .map_err(CouplingError::Flow)?;
+    let volume = new_network.pore_volumes(&new.mesh);
+    let (mut nq, mut np_, mut nef) = (nq, np_, nef);
+    fill_uncovered_pores(
+        &new_network,
+        &volume,
+        [&mut nq, &mut np_, &mut nef],
+        state.step,
+    )?;
     let mut temperature = vec![t_ref; nn];
+    let new_scale = super::state::solid_capacity_scale(&new.mesh, &state.solid_area_ref);
     for c in 0..nn {
         if !new.mesh.cell_kind[c].is_fluid() {
-            let cap = solid_rc * new.mesh.cell_volume(c);
+            let cap =
+                solid_rc * new.mesh.cell_volume(c) * owner_scale(&new_scale, new.mesh.cell_kind[c]);
             temperature[c] = t_ref + nes[c] / cap;
         }
     }
@@ -503,7 +523,7 @@ pub fn remesh(
                 index: q,
                 value: nq[c] + np_[c],
                 step: state.step,
-                why: "zero after the remap (a new pore that overlaps no old pore)",
+                why: "zero after the remap and the filling of uncovered pores",
             });
         }
         temperature[c] = t_ref + nef[c] / cap;
@@ -511,7 +531,6 @@ pub fn remesh(
         lp.push(np_[c]);
         tp.push(temperature[c]);
     }
-    let volume = new_network.pore_volumes(&new.mesh);
     let mut flow = FlowState::from_masses(&new_network, volume, tp, lq, lp, fluid)
         .map_err(CouplingError::Flow)?;
     flow.step = state.flow.step;
@@ -532,4 +551,89 @@ pub fn remesh(
         flow,
         heat,
     }))
+}
+
+/// A new pore whose remapped fluid density is below this fraction of its neighbours' is
+/// filled from them by [`fill_uncovered_pores`].
+pub const UNCOVERED_DENSITY_FRACTION: f64 = 0.01;
+
+/// Fills the new pores that the old fluid cells did not cover (space that was solid: a
+/// sphere that shrank, a gap that opened): each such pore, in index order, takes the share
+/// `f = V_e / (V_e + Σ V_j)` of the liquid mass, gas mass and fluid energy of each pore `j`
+/// joined to it by a channel, so donors keep their temperatures, all densities in the group
+/// end near the group's mean, and every total is kept to round-off. This is the fluid
+/// filling the new pore volume (A-Sect. 6.1: "the pressure drop was produced by an increase
+/// in fluid volume in the damaged area"). A pore is uncovered when its remapped mass per
+/// volume is below [`UNCOVERED_DENSITY_FRACTION`] of its neighbours'; pores whose neighbours
+/// are all uncovered are filled in a later pass. `fields` are cell-indexed (liquid mass, gas
+/// mass, fluid energy).
+pub fn fill_uncovered_pores(
+    network: &Network,
+    volume: &[f64],
+    fields: [&mut Vec<f64>; 3],
+    step: u64,
+) -> Result<usize, CouplingError> {
+    let cell = network.pore_cell();
+    let n = cell.len();
+    let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for &[a, b] in &network.parts().channel_pores {
+        let (a, b) = (a as usize, b as usize);
+        if a < n && b < n && a != b {
+            neighbours[a].push(b);
+            neighbours[b].push(a);
+        }
+    }
+    let [mq, mp, ef] = fields;
+    let mass = |q: usize, mq: &[f64], mp: &[f64]| {
+        let c = cell[q] as usize;
+        mq[c] + mp[c]
+    };
+    let mut filled = 0;
+    // Each pass fills at least one pore or stops; n passes bound any cascade.
+    for _pass in 0..n.max(1) {
+        let mut changed = false;
+        let mut remaining = 0;
+        for e in 0..n {
+            let density_e = mass(e, mq, mp) / volume[e];
+            let (m_nb, v_nb) = neighbours[e].iter().fold((0.0, 0.0), |(m, v), &j| {
+                (m + mass(j, mq, mp), v + volume[j])
+            });
+            if v_nb <= 0.0 || m_nb <= 0.0 {
+                if density_e.is_nan() || density_e <= 0.0 {
+                    remaining += 1;
+                }
+                continue;
+            }
+            if density_e >= UNCOVERED_DENSITY_FRACTION * m_nb / v_nb {
+                continue;
+            }
+            let f = volume[e] / (volume[e] + v_nb);
+            let ce = cell[e] as usize;
+            for &j in &neighbours[e] {
+                let cj = cell[j] as usize;
+                for field in [&mut *mq, &mut *mp, &mut *ef] {
+                    let share = f * field[cj];
+                    field[cj] -= share;
+                    field[ce] += share;
+                }
+            }
+            filled += 1;
+            changed = true;
+        }
+        if remaining == 0 || !changed {
+            break;
+        }
+    }
+    if let Some(q) = (0..n).find(|&q| mass(q, mq, mp).is_nan() || mass(q, mq, mp) <= 0.0) {
+        return Err(CouplingError::Unphysical {
+            stage: "remesh",
+            quantity: "fluid mass",
+            place: "pore",
+            index: q,
+            value: mass(q, mq, mp),
+            step,
+            why: "zero after the remap, and no channel joins it to a pore holding fluid",
+        });
+    }
+    Ok(filled)
 }

@@ -46,6 +46,33 @@ pub struct PoreScaleState {
     pub heat: HeatState,
     /// Mesh rebuilds so far.
     pub remeshes: u64,
+    /// Solid area of each sphere's cells in the initial mesh \[m²\]: the sphere's mass, and
+    /// so its heat capacity `ρ_s c_s A_ref b`, stays while its cross-section shrinks or swells
+    /// (A-Eq. 55) and its cells change; see [`solid_capacity_scale`].
+    pub solid_area_ref: Vec<f64>,
+}
+
+/// Solid area of each sphere's cells in `mesh` \[m²\] (`n` spheres).
+pub fn sphere_solid_areas(mesh: &thm_vpn_mesh::PoreMesh, n: usize) -> Vec<f64> {
+    let mut area = vec![0.0; n];
+    for (c, kind) in mesh.cell_kind.iter().enumerate() {
+        if let CellKind::Solid { owner } = *kind
+            && let Some(a) = area.get_mut(owner as usize)
+        {
+            *a += mesh.cell_area[c];
+        }
+    }
+    area
+}
+
+/// Per sphere, the factor on `ρ_s c_s V` of its solid cells in `mesh` that keeps the heat
+/// capacity of its mass: reference area over current area (1 for a sphere without cells).
+pub fn solid_capacity_scale(mesh: &thm_vpn_mesh::PoreMesh, solid_area_ref: &[f64]) -> Vec<f64> {
+    sphere_solid_areas(mesh, solid_area_ref.len())
+        .iter()
+        .zip(solid_area_ref)
+        .map(|(&a, &a0)| if a > 0.0 && a0 > 0.0 { a0 / a } else { 1.0 })
+        .collect()
 }
 
 /// The circles of the spheres as the mesher takes them: centre (x, y), radius, owner = the
@@ -172,6 +199,7 @@ impl PoreScaleState {
         };
         dem.particles.temperature = super::stages::sphere_temperatures(&mesh, &heat, &dem)?;
         let n = dem.particles.len();
+        let solid_area_ref = sphere_solid_areas(&mesh.mesh, n);
         Ok(Self {
             step: 0,
             time: 0.0,
@@ -183,6 +211,7 @@ impl PoreScaleState {
             flow,
             heat,
             remeshes: 0,
+            solid_area_ref,
         })
     }
 
@@ -214,9 +243,12 @@ impl PoreScaleState {
 pub fn cell_capacities(state: &PoreScaleState, heat: &HeatParams) -> Vec<f64> {
     let mesh = &state.mesh.mesh;
     let solid = heat.solid.density * heat.solid.specific_heat;
+    let scale = solid_capacity_scale(mesh, &state.solid_area_ref);
     let mut cap: Vec<f64> = (0..mesh.n_cells())
         .map(|c| match mesh.cell_kind[c] {
-            CellKind::Solid { .. } => solid * mesh.cell_volume(c),
+            CellKind::Solid { owner } => {
+                solid * mesh.cell_volume(c) * scale.get(owner as usize).copied().unwrap_or(1.0)
+            }
             _ => 0.0,
         })
         .collect();

@@ -153,7 +153,8 @@ fn range(v: &[f64]) -> [f64; 2] {
 
 impl Scenario for PoreScaleBar {
     const KIND: &'static str = "pore_scale_bar";
-    const STATE_VERSION: u32 = 1;
+    // 2: the state carries each sphere's reference solid area (heat capacity of its mass).
+    const STATE_VERSION: u32 = 2;
     type Params = Params;
     type State = PoreScaleState;
 
@@ -412,7 +413,7 @@ impl Scenario for PoreScaleBar {
                 "equivalent bar of A-Eq. 63 with advection at the mean flux so far".to_string(),
                 mean_mass_flux(state),
             )),
-            BarCase::ContractionFixed => None,
+            BarCase::ContractionFixed | BarCase::ContractionFree => None,
         }
         // At t = 0 the reference is the initial state itself.
         .filter(|_| time > 0.0)
