@@ -103,7 +103,8 @@ impl FlowStepper {
         };
         while remaining > 0.0 {
             h = h.min(remaining);
-            if tries >= max_tries || h < MIN_SUBSTEP_FRACTION * dt {
+            // The floor applies to halved sub-steps, not to a round-off leftover of `dt`.
+            if tries >= max_tries || (h < MIN_SUBSTEP_FRACTION * dt && h < remaining) {
                 return Err(FlowError::TooManySubsteps {
                     step: state.step,
                     substeps: report.substeps,
