@@ -597,6 +597,14 @@ pub enum RemeshReason {
         /// Cell.
         cell: usize,
     },
+    /// A cell lost more than a caller's threshold of its area in one step (value: area after
+    /// over area before), e.g. a pore closing as a bond snaps, caught before it inverts.
+    ShrunkCell {
+        /// Cell.
+        cell: usize,
+        /// Area ratio.
+        value: f64,
+    },
 }
 
 /// Decides whether the mesh must be rebuilt for the current state (the first reason found,

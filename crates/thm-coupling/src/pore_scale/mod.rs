@@ -17,7 +17,17 @@
 //!    (A-Eqs. 43–45); then the pores are closed again at their new temperatures;
 //! 7. [`stages::sphere_radii`]: sphere temperatures to radii (A-Eq. 55);
 //! 8. [`stages::remesh`]: remesh on trigger and conservative remap of liquid and gas mass and
-//!    of fluid and solid energy.
+//!    of fluid and solid energy. New pores that no old fluid covered (a sphere shrank, a gap
+//!    opened) are filled from their channel neighbours ([`stages::fill_uncovered_pores`]) and
+//!    pores the remap overfilled are levelled with theirs ([`stages::spill_overfilled_pores`]),
+//!    both conserving every total to round-off. A pore that one mesh motion leaves with less
+//!    than half its volume ([`stages::shrinking_pore`]: a bond snapped, a gap closed) forces
+//!    this stage before the flow stage of the same step, which could not keep its fluid
+//!    positive.
+//!
+//! Each sphere keeps the heat capacity of its mass while A-Eq. 55 shrinks its cross-section:
+//! its solid cells share `ρ_s c_s A_ref b` by area (`A_ref` its solid area in the first mesh,
+//! [`PoreScaleState::solid_area_ref`]).
 //!
 //! A fixed skeleton ([`Skeleton::Fixed`], A-Sect. 6 case b and the fluid–heat cases of
 //! A-Sects. 4–5) runs stages 1, 5 and 6 of the same step: no DEM step, no motion, no change of
@@ -244,6 +254,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
         )?;
         lap(&mut seconds.fluid_forces);
         let mut dem_steps = 0;
+        let mut remeshed = None;
         if free {
             let (h, n) = dem_substeps(self.config.params.dem.time_step, dt);
             let dem = self.dem_stepper(h)?;
@@ -278,6 +289,12 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
                     &solid_capacity_scale(&state.mesh.mesh, &state.solid_area_ref),
                 )
                 .map_err(CouplingError::Heat)?;
+            // A pore that this motion nearly closed: rebuild the mesh before the flow stage
+            // (the remap conserves mass and energy, so the step continues on the new mesh).
+            if let Some(reason) = stages::shrinking_pore(&self.network, &state.mesh, &state.flow) {
+                remeshed = self.remesh_stage(state, Some(reason))?;
+                self.old_capacity = cell_capacities(state, &self.config.params.heat);
+            }
             lap(&mut seconds.mesh);
         }
         let FlowTransfer {
@@ -317,7 +334,6 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
         )?;
         lap(&mut seconds.heat);
         let boundary_energy = self.heat.boundary_energy();
-        let mut remeshed = None;
         if free {
             stages::sphere_radii(
                 &state.mesh,
@@ -327,31 +343,8 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
                 &mut state.radius_rate,
                 dt,
             )?;
-            if let Some(r) = stages::remesh(
-                &self.config.mesh,
-                &self.config.remesh,
-                &self.config.flow_boundaries(),
-                self.config.params.boundary_reduction_factor,
-                &self.config.params.heat,
-                &self.fluid,
-                &self.network,
-                state,
-            )? {
-                remeshed = Some(r.reason);
-                state.mesh = r.mesh;
-                state.mesh_contacts = r.mesh_contacts;
-                state.flow = r.flow;
-                state.heat = r.heat;
-                state.rotation.fill(0.0);
-                state.remeshes += 1;
-                // The sphere temperatures of the new cells become T_avg^n, so the remap itself
-                // changes no radius.
-                let t = stages::sphere_temperatures(&state.mesh, &state.heat, &state.dem)?;
-                state.dem.particles.temperature = t;
-                let (network, model, geometry) = derived(&self.config, state)?;
-                self.network = network;
-                self.heat_model = model;
-                self.heat_geometry = geometry;
+            if let Some(reason) = self.remesh_stage(state, None)? {
+                remeshed = Some(reason);
             }
         }
         if free {
@@ -422,6 +415,47 @@ pub fn dem_substeps(dt_dem: f64, dt: f64) -> (f64, u64) {
 }
 
 /// The parts of the stepper that follow from the state's mesh.
+impl<F: PoreFluid> PoreScaleStepper<F> {
+    /// Stage 8 (or a remesh forced by `forced`): when the criteria or `forced` ask, a new mesh
+    /// of the spheres as they are, the conservative remap of the fluid masses and energies,
+    /// and everything that derives from the mesh rebuilt. Returns why it remeshed.
+    fn remesh_stage(
+        &mut self,
+        state: &mut PoreScaleState,
+        forced: Option<RemeshReason>,
+    ) -> Result<Option<RemeshReason>, CouplingError> {
+        let Some(r) = stages::remesh(
+            forced,
+            &self.config.mesh,
+            &self.config.remesh,
+            &self.config.flow_boundaries(),
+            self.config.params.boundary_reduction_factor,
+            &self.config.params.heat,
+            &self.fluid,
+            &self.network,
+            state,
+        )?
+        else {
+            return Ok(None);
+        };
+        state.mesh = r.mesh;
+        state.mesh_contacts = r.mesh_contacts;
+        state.flow = r.flow;
+        state.heat = r.heat;
+        state.rotation.fill(0.0);
+        state.remeshes += 1;
+        // The sphere temperatures of the new cells become T_avg^n, so the remap itself
+        // changes no radius.
+        let t = stages::sphere_temperatures(&state.mesh, &state.heat, &state.dem)?;
+        state.dem.particles.temperature = t;
+        let (network, model, geometry) = derived(&self.config, state)?;
+        self.network = network;
+        self.heat_model = model;
+        self.heat_geometry = geometry;
+        Ok(Some(r.reason))
+    }
+}
+
 fn derived(
     config: &PoreScaleConfig,
     state: &PoreScaleState,

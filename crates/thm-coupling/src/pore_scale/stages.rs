@@ -412,6 +412,7 @@ pub struct Remeshed {
 /// masses through the closure (A-Eq. 29). `None` when no remesh is needed.
 #[allow(clippy::too_many_arguments)]
 pub fn remesh(
+    forced: Option<RemeshReason>,
     settings: &MeshSettings,
     criteria: &RemeshCriteria,
     boundaries: &[(thm_vpn_mesh::BoundarySide, thm_vpn_flow::BoundaryCondition)],
@@ -437,10 +438,14 @@ pub fn remesh(
     let circles = circles_of(dem);
     let contacts = contacts_of(dem, &circles);
     let segments = settings.params().segments_per_circle;
-    let Some(reason) = remesh_needed(&state.mesh, &motion, &contacts, segments, criteria)
-        .map_err(CouplingError::Mesh)?
-    else {
-        return Ok(None);
+    let reason = match forced {
+        Some(r) => r,
+        None => match remesh_needed(&state.mesh, &motion, &contacts, segments, criteria)
+            .map_err(CouplingError::Mesh)?
+        {
+            Some(r) => r,
+            None => return Ok(None),
+        },
     };
     let new = mesh_packing(&circles, &contacts, settings).map_err(CouplingError::Mesh)?;
     let old_mesh = &state.mesh.mesh;
@@ -497,6 +502,7 @@ pub fn remesh(
         [&mut nq, &mut np_, &mut nef],
         state.step,
     )?;
+    spill_overfilled_pores(&new_network, &volume, [&mut nq, &mut np_, &mut nef]);
     let mut temperature = vec![t_ref; nn];
     let new_scale = super::state::solid_capacity_scale(&new.mesh, &state.solid_area_ref);
     for c in 0..nn {
@@ -551,6 +557,148 @@ pub fn remesh(
         flow,
         heat,
     }))
+}
+
+/// A pore whose cell keeps less than this fraction of its volume after one mesh motion
+/// forces a remesh before the flow stage ([`shrinking_pore`]).
+pub const SHRINK_REMESH_RATIO: f64 = 0.5;
+
+/// After the mesh motion of a free skeleton: the first pore whose cell now has less than
+/// [`SHRINK_REMESH_RATIO`] of the volume the flow state holds for it (a pore closing as a
+/// bond snaps or a contact closes), as the reason to rebuild the mesh before the flow stage,
+/// which could not keep its fluid positive. A cell at or below zero area is
+/// [`RemeshReason::InvertedCell`].
+pub fn shrinking_pore(
+    network: &Network,
+    mesh: &PackingMesh,
+    flow: &FlowState,
+) -> Option<RemeshReason> {
+    network
+        .pore_cell()
+        .iter()
+        .zip(&flow.volume)
+        .find_map(|(&c, &v)| {
+            let cell = c as usize;
+            let now = mesh.mesh.cell_volume(cell);
+            if now <= 0.0 {
+                Some(RemeshReason::InvertedCell { cell })
+            } else if now < SHRINK_REMESH_RATIO * v {
+                Some(RemeshReason::ShrunkCell {
+                    cell,
+                    value: now / v,
+                })
+            } else {
+                None
+            }
+        })
+}
+
+/// A new pore whose remapped fluid density is above this multiple of its group's (itself
+/// and the pores its channels join) or of the whole network's spills the excess by
+/// [`spill_overfilled_pores`].
+pub const OVERFILLED_DENSITY_RATIO: f64 = 1.2;
+
+/// Passes of [`spill_overfilled_pores`] at most (each levels every overfilled pore with its
+/// lower neighbours; a squeezed cluster spreads over one more channel layer per pass).
+pub const MAX_SPILL_PASSES: usize = 10_000;
+
+/// Spills the excess of new pores that the remap overfilled (fluid of an old pore that the
+/// skeleton squeezed within one step, which the flow had no time to move): each such pore,
+/// in index order, keeps the mean density `ρ_g = (m_e + Σ m_j)/(V_e + Σ V_j)` and
+/// gives the rest, with its own liquid/gas split and specific energy, to the pores its
+/// channels join in proportion to their volumes (the target is the smaller of the group's
+/// and the whole network's mean density, so a squeezed cluster spreads outwards over the
+/// passes). Every total is kept to round-off. `fields`
+/// are cell-indexed (liquid mass, gas mass, fluid energy). Returns the pores spilled.
+pub fn spill_overfilled_pores(
+    network: &Network,
+    volume: &[f64],
+    fields: [&mut Vec<f64>; 3],
+) -> usize {
+    let cell = network.pore_cell();
+    let n = cell.len();
+    let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for &[a, b] in &network.parts().channel_pores {
+        let (a, b) = (a as usize, b as usize);
+        if a < n && b < n && a != b {
+            neighbours[a].push(b);
+            neighbours[b].push(a);
+        }
+    }
+    let [mq, mp, ef] = fields;
+    let total_volume: f64 = volume.iter().sum();
+    let global = cell
+        .iter()
+        .map(|&c| mq[c as usize] + mp[c as usize])
+        .sum::<f64>()
+        / total_volume;
+    let mut spilled = 0;
+    // Passes until nothing spills: a squeezed region spreads over a few channel layers.
+    for _pass in 0..MAX_SPILL_PASSES {
+        let before = spilled;
+        for e in 0..n {
+            let ce = cell[e] as usize;
+            let m_e = mq[ce] + mp[ce];
+            let (m_nb, v_nb) = neighbours[e].iter().fold((0.0, 0.0), |(m, v), &j| {
+                let cj = cell[j] as usize;
+                (m + mq[cj] + mp[cj], v + volume[j])
+            });
+            if v_nb <= 0.0 || m_e <= 0.0 {
+                continue;
+            }
+            let target = global.min((m_e + m_nb) / (volume[e] + v_nb));
+            let density = |q: usize, mq: &[f64], mp: &[f64]| {
+                let c = cell[q] as usize;
+                (mq[c] + mp[c]) / volume[q]
+            };
+            if density(e, mq, mp) <= OVERFILLED_DENSITY_RATIO * target {
+                continue;
+            }
+            // Level e with the neighbours below the common density ρ_g of e and those
+            // neighbours (found by dropping the ones above it until none is): e keeps
+            // ρ_g V_e, each such neighbour j receives (ρ_g − ρ_j) V_j, which add up to e's
+            // excess; all of it with e's liquid/gas split and specific energy.
+            let mut lower: Vec<usize> = neighbours[e]
+                .iter()
+                .copied()
+                .filter(|&j| density(j, mq, mp) < density(e, mq, mp))
+                .collect();
+            let mut level = 0.0;
+            for _ in 0..lower.len() + 1 {
+                let (m, v) = lower.iter().fold((m_e, volume[e]), |(m, v), &j| {
+                    let cj = cell[j] as usize;
+                    (m + mq[cj] + mp[cj], v + volume[j])
+                });
+                level = m / v;
+                let before = lower.len();
+                lower.retain(|&j| density(j, mq, mp) < level);
+                if lower.len() == before {
+                    break;
+                }
+            }
+            if lower.is_empty() {
+                continue;
+            }
+            let gift: Vec<f64> = lower
+                .iter()
+                .map(|&j| (level - density(j, mq, mp)) * volume[j])
+                .collect();
+            let f = 1.0 - level * volume[e] / m_e;
+            for field in [&mut *mq, &mut *mp, &mut *ef] {
+                let out = f * field[ce];
+                field[ce] -= out;
+                let total: f64 = gift.iter().sum();
+                for (&j, &g) in lower.iter().zip(&gift) {
+                    field[cell[j] as usize] += out * g / total;
+                }
+            }
+            spilled += 1;
+        }
+        if spilled == before {
+            break;
+        }
+    }
+    spilled
 }
 
 /// A new pore whose remapped fluid density is below this fraction of its neighbours' is
