@@ -38,6 +38,66 @@ impl HeatStepper {
         state: &mut HeatState,
         dt: f64,
     ) -> Result<(), HeatError> {
+        self.implicit_step_inner(model, geometry, mesh, input, state, None, dt)
+    }
+
+    /// [`Self::implicit_step`] for cells whose heat capacity changed over the step (fluid
+    /// that flowed in or out, a cell that moved): the energy balance is
+    /// `C^{n+1} (T^{n+1} − T_ref) − C^n (T^n − T_ref) = dt × (fluxes at T^{n+1})`, with
+    /// `C^{n+1}` from `input` and `C^n = old_capacity` \[J/K\]. With first-order upwind
+    /// advection at T^{n+1}, a cell that only loses mass keeps its temperature.
+    #[allow(clippy::too_many_arguments)]
+    pub fn implicit_step_with_old_capacity(
+        &mut self,
+        model: &HeatModel,
+        geometry: &HeatGeometry,
+        mesh: &PoreMesh,
+        input: &FlowInput,
+        state: &mut HeatState,
+        old_capacity: &[f64],
+        reference_temperature: f64,
+        dt: f64,
+    ) -> Result<(), HeatError> {
+        if old_capacity.len() != mesh.n_cells() {
+            return Err(HeatError::LengthMismatch {
+                what: "old_capacity",
+                expected: mesh.n_cells(),
+                got: old_capacity.len(),
+            });
+        }
+        if let Some(c) = old_capacity
+            .iter()
+            .position(|c| !(c.is_finite() && *c >= 0.0))
+        {
+            return Err(HeatError::InputOutOfRange {
+                quantity: "old_capacity",
+                index: c,
+                range: "finite and >= 0 J/K",
+                value: old_capacity[c],
+            });
+        }
+        self.implicit_step_inner(
+            model,
+            geometry,
+            mesh,
+            input,
+            state,
+            Some((old_capacity, reference_temperature)),
+            dt,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn implicit_step_inner(
+        &mut self,
+        model: &HeatModel,
+        geometry: &HeatGeometry,
+        mesh: &PoreMesh,
+        input: &FlowInput,
+        state: &mut HeatState,
+        old: Option<(&[f64], f64)>,
+        dt: f64,
+    ) -> Result<(), HeatError> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(HeatError::ParameterOutOfRange {
                 field: "dt".to_owned(),
@@ -54,7 +114,12 @@ impl HeatStepper {
 
         let n = mesh.n_cells();
         let temp = &state.temperature;
-        let mut rhs: Vec<f64> = (0..n).map(|c| self.capacity[c] / dt * temp[c]).collect();
+        let mut rhs: Vec<f64> = match old {
+            None => (0..n).map(|c| self.capacity[c] / dt * temp[c]).collect(),
+            Some((c_old, t_ref)) => (0..n)
+                .map(|c| (c_old[c] * (temp[c] - t_ref) + self.capacity[c] * t_ref) / dt)
+                .collect(),
+        };
         let mut diag: Vec<f64> = (0..n).map(|c| self.capacity[c] / dt).collect();
         let mut off: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(mesh.n_faces() + n);
         // Advection entries (both triangles), only when something flows.

@@ -510,3 +510,72 @@ fn solid_capacity_scale_multiplies_the_owners_capacity() {
     assert!(err.to_string().contains("solid capacity scale"), "{err}");
     assert!(geometry.set_solid_capacity_scale(&mesh, &[]).is_err());
 }
+
+/// The implicit step with a capacity change: closed and adiabatic, so
+/// `Σ C^{n+1}(T^{n+1} − T_ref) = Σ C^n (T^n − T_ref)` to round-off; a uniform field stays
+/// uniform at `T_ref + (C^n/C^{n+1})(T − T_ref)`.
+#[test]
+fn implicit_step_balances_the_old_capacity_against_the_new() {
+    let mesh = solid_bar(6);
+    let params = unit_solid_params(Vec::new());
+    let model = HeatModel::new(&params, &mesh).unwrap();
+    let geometry = HeatGeometry::new(&model, &mesh).unwrap();
+    let input = FlowInput::liquid_at_rest(&mesh, 1000.0, 1.0);
+    let t_ref = 290.0;
+    let mut stepper = HeatStepper::new();
+    let new_capacity: Vec<f64> = (0..mesh.n_cells()).map(|c| mesh.cell_volume(c)).collect();
+    // Uniform: stays uniform at the rescaled temperature.
+    let old: Vec<f64> = new_capacity.iter().map(|c| 2.0 * c).collect();
+    let mut state = HeatState::uniform(&mesh, 300.0);
+    stepper
+        .implicit_step_with_old_capacity(
+            &model, &geometry, &mesh, &input, &mut state, &old, t_ref, 0.1,
+        )
+        .unwrap();
+    for &t in &state.temperature {
+        assert!((t - (t_ref + 2.0 * 10.0)).abs() < 1e-9, "{t}");
+    }
+    // Non-uniform capacities and temperatures: the energy balance holds to round-off.
+    let old: Vec<f64> = new_capacity
+        .iter()
+        .enumerate()
+        .map(|(c, v)| v * (0.5 + 0.1 * (c % 7) as f64))
+        .collect();
+    let mut state = HeatState::uniform(&mesh, 300.0);
+    for (c, t) in state.temperature.iter_mut().enumerate() {
+        *t = 295.0 + (c % 5) as f64;
+    }
+    let before: f64 = old
+        .iter()
+        .zip(&state.temperature)
+        .map(|(c, t)| c * (t - t_ref))
+        .sum();
+    stepper
+        .implicit_step_with_old_capacity(
+            &model, &geometry, &mesh, &input, &mut state, &old, t_ref, 0.1,
+        )
+        .unwrap();
+    let after: f64 = new_capacity
+        .iter()
+        .zip(&state.temperature)
+        .map(|(c, t)| c * (t - t_ref))
+        .sum();
+    assert!(
+        ((after - before) / before).abs() < 1e-12,
+        "{after} vs {before}"
+    );
+    // A wrong length is an error naming the array.
+    let err = stepper
+        .implicit_step_with_old_capacity(
+            &model,
+            &geometry,
+            &mesh,
+            &input,
+            &mut state,
+            &old[1..],
+            t_ref,
+            0.1,
+        )
+        .unwrap_err();
+    assert!(err.to_string().contains("old_capacity"), "{err}");
+}

@@ -278,8 +278,10 @@ pub struct HeatParts<'a> {
 /// rates. A cell's capacity changed over the step: a fluid cell's with the mass the flow
 /// moved, a solid cell's with its volume as the sphere moved and expanded. To keep the energy
 /// `Σ C (T − T_ref)` of A-Eqs. 39 and 50 exact (`ρ^{n+1} E^{n+1} V^{n+1} − ρ^n E^n V^n`), the
-/// temperature is first re-expressed at the new capacity, `T ← T_ref + (C^n/C^{n+1})(T − T_ref)`,
-/// so that the advective heat of the step, `ṁ c_p (T_f − T_ref)`, then carries the entering
+/// implicit step balances `C^{n+1}(T^{n+1} − T_ref) − C^n (T^n − T_ref)` against the step's
+/// fluxes (`HeatStepper::implicit_step_with_old_capacity`); the explicit step first
+/// re-expresses the temperature at the new capacity, `T ← T_ref + (C^n/C^{n+1})(T − T_ref)`.
+/// Either way the advective heat of the step, `ṁ c_p (T_f − T_ref)`, carries the entering
 /// enthalpy. `capacity` is `(C^n, C^{n+1})` per cell ([`super::cell_capacities`]).
 /// Afterwards the fluid temperatures go to the pores and the flow state is closed again at
 /// them (thermal pressurisation, A-Eq. 29). Returns the explicit sub-steps taken.
@@ -305,22 +307,33 @@ pub fn heat_stage(
             expected: heat.temperature.len(),
         });
     }
-    for ((t, &c_old), &c_new) in heat.temperature.iter_mut().zip(old).zip(new) {
-        if c_new > 0.0 && c_old != c_new {
-            *t = t_ref + c_old / c_new * (*t - t_ref);
-        }
-    }
     let m = &mesh.mesh;
     let substeps = match parts.scheme {
         HeatScheme::Explicit => {
+            for ((t, &c_old), &c_new) in heat.temperature.iter_mut().zip(old).zip(new) {
+                if c_new > 0.0 && c_old != c_new {
+                    *t = t_ref + c_old / c_new * (*t - t_ref);
+                }
+            }
             stepper
                 .step(parts.model, parts.geometry, m, input, heat, dt)
                 .map_err(CouplingError::Heat)?
                 .substeps
         }
         HeatScheme::Implicit => {
+            // The same balance without the intermediate temperature, which leaves the
+            // physical range when a cell loses most of its fluid in one step.
             stepper
-                .implicit_step(parts.model, parts.geometry, m, input, heat, dt)
+                .implicit_step_with_old_capacity(
+                    parts.model,
+                    parts.geometry,
+                    m,
+                    input,
+                    heat,
+                    old,
+                    t_ref,
+                    dt,
+                )
                 .map_err(CouplingError::Heat)?;
             1
         }
