@@ -579,13 +579,20 @@ pub const SHRINK_REMESH_RATIO: f64 = 0.5;
 /// After the mesh motion of a free skeleton: the first pore whose cell now has less than
 /// [`SHRINK_REMESH_RATIO`] of the volume the flow state holds for it (a pore closing as a
 /// bond snaps or a contact closes), as the reason to rebuild the mesh before the flow stage,
-/// which could not keep its fluid positive. A cell at or below zero area is
-/// [`RemeshReason::InvertedCell`].
+/// which could not keep its fluid positive. Any cell (fluid or solid) at or below zero area
+/// is [`RemeshReason::InvertedCell`].
 pub fn shrinking_pore(
     network: &Network,
     mesh: &PackingMesh,
     flow: &FlowState,
 ) -> Option<RemeshReason> {
+    let inverted = |c: &usize| {
+        let a = mesh.mesh.cell_area[*c];
+        a.is_nan() || a <= 0.0
+    };
+    if let Some(cell) = (0..mesh.mesh.n_cells()).find(inverted) {
+        return Some(RemeshReason::InvertedCell { cell });
+    }
     network
         .pore_cell()
         .iter()
