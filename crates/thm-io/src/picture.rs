@@ -19,7 +19,7 @@ pub type Rgb = [u8; 3];
 /// A filled polygon (a triangle, a cell), optionally outlined.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FilledPolygon {
-    /// Corners in world coordinates [m], in order (either orientation).
+    /// Corners in world coordinates \[m\], in order (either orientation).
     pub corners: Vec<[f64; 2]>,
     /// Fill colour.
     pub fill: Rgb,
@@ -30,7 +30,7 @@ pub struct FilledPolygon {
 /// A straight segment drawn over the polygons.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Segment {
-    /// End points in world coordinates [m].
+    /// End points in world coordinates \[m\].
     pub ends: [[f64; 2]; 2],
     /// Colour.
     pub colour: Rgb,
@@ -51,11 +51,11 @@ pub struct Picture {
     pub segments: Vec<Segment>,
 }
 
-/// Margin around the drawing [px].
+/// Margin around the drawing \[px\].
 const MARGIN_PX: u32 = 8;
-/// Height of the title band [px].
+/// Height of the title band \[px\].
 const TITLE_PX: u32 = 34;
-/// Largest image side [px].
+/// Largest image side \[px\].
 const MAX_SIDE_PX: u32 = 8192;
 
 fn colour(c: Rgb) -> RGBColor {

@@ -73,9 +73,9 @@ pub struct Channels {
     pub kind: Vec<ChannelKind>,
     /// The two fluid cells the channel joins.
     pub cells: Vec<[u32; 2]>,
-    /// Distance between the centroids of the two cells [m].
+    /// Distance between the centroids of the two cells \[m\].
     pub length: Vec<f64>,
-    /// Hydraulic aperture h [m].
+    /// Hydraulic aperture h \[m\].
     pub aperture: Vec<f64>,
     /// For T2T: the shared face; for S2S: [`NONE`].
     pub face: Vec<u32>,
@@ -98,10 +98,10 @@ impl Channels {
 /// The virtual pore network mesh.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct PoreMesh {
-    /// Out-of-plane thickness [m] that turns areas into volumes (paper A: the largest sphere
+    /// Out-of-plane thickness \[m\] that turns areas into volumes (paper A: the largest sphere
     /// diameter).
     pub thickness: f64,
-    /// Vertex positions [m].
+    /// Vertex positions \[m\].
     pub vertices: Vec<[f64; 2]>,
     /// For vertices on a circle: the sphere index; otherwise [`NONE`].
     pub vertex_sphere: Vec<u32>,
@@ -109,9 +109,9 @@ pub struct PoreMesh {
     pub cell_vertices: Vec<[u32; 3]>,
     /// Fluid or solid (with owner).
     pub cell_kind: Vec<CellKind>,
-    /// Cell areas [m²].
+    /// Cell areas \[m²\].
     pub cell_area: Vec<f64>,
-    /// Cell centroids [m].
+    /// Cell centroids \[m\].
     pub cell_centroid: Vec<[f64; 2]>,
     /// For each cell, its three faces: face `k` joins corners `k` and `k+1`.
     pub cell_faces: Vec<[u32; 3]>,
@@ -119,12 +119,12 @@ pub struct PoreMesh {
     pub face_vertices: Vec<[u32; 2]>,
     /// The cells on either side; `[c, NONE]` on the boundary.
     pub face_cells: Vec<[u32; 2]>,
-    /// Face lengths [m].
+    /// Face lengths \[m\].
     pub face_length: Vec<f64>,
     /// Unit normals pointing from `face_cells[f][0]` towards `face_cells[f][1]` (outward on the
     /// boundary).
     pub face_normal: Vec<[f64; 2]>,
-    /// Face mid-points [m].
+    /// Face mid-points \[m\].
     pub face_centroid: Vec<[f64; 2]>,
     /// Interior or boundary (with side).
     pub face_kind: Vec<FaceKind>,
@@ -523,12 +523,12 @@ impl PoreMesh {
         self.face_vertices.len()
     }
 
-    /// Cell volume `area × thickness` [m³].
+    /// Cell volume `area × thickness` \[m³\].
     pub fn cell_volume(&self, cell: usize) -> f64 {
         self.cell_area[cell] * self.thickness
     }
 
-    /// Total area of the fluid cells [m²].
+    /// Total area of the fluid cells \[m²\].
     pub fn fluid_area(&self) -> f64 {
         self.cell_area
             .iter()
@@ -538,7 +538,7 @@ impl PoreMesh {
             .sum()
     }
 
-    /// Total area of the solid cells [m²].
+    /// Total area of the solid cells \[m²\].
     pub fn solid_area(&self) -> f64 {
         self.cell_area
             .iter()
@@ -612,7 +612,7 @@ impl PoreMesh {
 
     /// Stage "faces": length, unit normal and mid-point of every face, one pass.
     ///
-    /// Faces go [`LANES`] at a time through the same arithmetic, so the square roots run as
+    /// Faces go `LANES` at a time through the same arithmetic, so the square roots run as
     /// one packed instruction per pair (the compiler keeps the divisions scalar; square roots
     /// and divisions share the divider that bounds this stage); every face's result is the
     /// same bits as computed alone.
@@ -645,7 +645,7 @@ impl PoreMesh {
 
     /// Stage "channels": the length of every channel (distance between the two cell
     /// centroids) and, with `Some(γ)`, the T2T apertures of A-Eq. 9, one pass (after the cell
-    /// stage). The aperture is taken from the face's end points ([`t2t_aperture`]), not from
+    /// stage). The aperture is taken from the face's end points (`t2t_aperture`), not from
     /// its normal and length, so the pass reads the small vertex array instead of two large
     /// per-face ones.
     pub fn update_channel_geometry(&mut self, t2t_reduction_factor: Option<f64>) {

@@ -3,12 +3,12 @@
 //! Stages (each a function below):
 //! 1. [`validate_input`]: finite centres, positive radii, valid contacts.
 //! 2. [`overlapping_pairs`]: every pair of overlapping circles (uniform grid search).
-//! 3. [`solid_polygon`] per circle: the circle's *power cell* (intersection of the half-planes
+//! 3. `solid_polygon` per circle: the circle's *power cell* (intersection of the half-planes
 //!    bounded by the radical lines — the chords — of its overlapping neighbours, and of the box)
 //!    intersected with the disc, its boundary arcs discretised with the uniform angular grid of
 //!    the circle. Shared vertices (chord ends, radical centres, box crossings) have canonical
 //!    keys and coordinates computed once per key, so neighbouring polygons share them exactly.
-//! 4. [`snap_vertices`]: vertices closer than the snap tolerance are merged (tangent circles).
+//! 4. `snap_vertices`: vertices closer than the snap tolerance are merged (tangent circles).
 //! 5. Constrained Delaunay triangulation (`spade`) with every polygon edge (and the box sides)
 //!    as a constraint.
 //! 6. Classification: a triangle whose centroid lies in the polygon of circle `i` is a solid
@@ -37,9 +37,9 @@ use crate::motion::{VertexAnchors, VertexConstraint};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Circle {
-    /// Centre [m].
+    /// Centre \[m\].
     pub centre: [f64; 2],
-    /// Radius [m].
+    /// Radius \[m\].
     pub radius: f64,
     /// The caller's sphere id, recorded in [`CellKind::Solid`] and `vertex_sphere`.
     pub owner: u32,
@@ -51,7 +51,7 @@ pub struct Circle {
 pub struct Contact {
     /// The two circles.
     pub circles: [u32; 2],
-    /// Effective normal stress at the contact σ_n [Pa], compression positive (A-Eq. 8).
+    /// Effective normal stress at the contact σ_n \[Pa\], compression positive (A-Eq. 8).
     pub normal_stress: f64,
 }
 
@@ -61,15 +61,15 @@ pub struct Contact {
 pub enum Outline {
     /// The rectangle `[min, max]`; circles are clipped by it.
     Box {
-        /// Lower-left corner [m].
+        /// Lower-left corner \[m\].
         min: [f64; 2],
-        /// Upper-right corner [m].
+        /// Upper-right corner \[m\].
         max: [f64; 2],
     },
     /// The alpha shape of the packing: fluid triangles reachable from the convex hull through
-    /// fluid triangles whose circumradius exceeds `alpha` [m] are outside the specimen.
+    /// fluid triangles whose circumradius exceeds `alpha` \[m\] are outside the specimen.
     AlphaShape {
-        /// α [m].
+        /// α \[m\].
         alpha: f64,
     },
 }
@@ -81,9 +81,9 @@ pub enum Outline {
 pub struct S2sApertureParams {
     /// Aperture coefficient β [-] (paper A, Table 1: 1.2).
     pub beta: f64,
-    /// Hydraulic aperture at infinite normal stress h_inf [m] (Table 1: 5.75e-7).
+    /// Hydraulic aperture at infinite normal stress h_inf \[m\] (Table 1: 5.75e-7).
     pub aperture_infinite_stress: f64,
-    /// Hydraulic aperture at zero normal stress h_0 [m] (Table 1: 3.25e-6).
+    /// Hydraulic aperture at zero normal stress h_0 \[m\] (Table 1: 3.25e-6).
     pub aperture_zero_stress: f64,
     /// Stress decay coefficient c [1/Pa] (A-Eq. 8: 1.5e-7).
     pub stress_decay: f64,
@@ -101,7 +101,7 @@ impl Default for S2sApertureParams {
 }
 
 impl S2sApertureParams {
-    /// Hydraulic aperture of an S2S channel (A-Eq. 8) [m]. Tensile stress (σ_n < 0) is taken
+    /// Hydraulic aperture of an S2S channel (A-Eq. 8) \[m\]. Tensile stress (σ_n < 0) is taken
     /// as zero: an opened contact has the zero-stress aperture h_0 times β.
     pub fn aperture(&self, normal_stress: f64) -> f64 {
         let s = normal_stress.max(0.0);
@@ -120,7 +120,7 @@ pub struct MeshParams {
     pub segments_per_circle: u32,
     /// The outer boundary.
     pub outline: Outline,
-    /// Out-of-plane thickness [m]; `None` = the largest circle diameter (paper A, Sect. 2.4).
+    /// Out-of-plane thickness \[m\]; `None` = the largest circle diameter (paper A, Sect. 2.4).
     pub thickness: Option<f64>,
     /// T2T reduction factor γ of A-Eq. 9 [-] (Table 1: 0.0115).
     pub t2t_reduction_factor: f64,
@@ -221,7 +221,7 @@ impl MeshSettings {
 pub struct Chords {
     /// The two circles (indices into the circle list), `[a, b]` with `a < b`.
     pub circles: Vec<[u32; 2]>,
-    /// Overlap `r_a + r_b − d` at mesh time [m].
+    /// Overlap `r_a + r_b − d` at mesh time \[m\].
     pub overlap: Vec<f64>,
     /// End vertices of the cut in the mesh (`[NONE, NONE]` where the cut vanished).
     pub ends: Vec<[u32; 2]>,
@@ -263,7 +263,7 @@ impl PackingMesh {
     }
 
     /// Sets the S2S apertures (A-Eq. 8) from the current normal stress of each contact (same
-    /// order as the contacts given to the mesher) [Pa], between remeshes.
+    /// order as the contacts given to the mesher) \[Pa\], between remeshes.
     pub fn update_s2s_apertures(
         &mut self,
         normal_stress: &[f64],
@@ -290,7 +290,7 @@ impl PackingMesh {
         Ok(())
     }
 
-    /// Total solid area of circle `i` [m²].
+    /// Total solid area of circle `i` \[m²\].
     pub fn circle_solid_area(&self, i: usize) -> f64 {
         self.cells_of_circle(i)
             .iter()

@@ -47,7 +47,7 @@ pub struct VertexAnchors {
     pub offset: Vec<[f64; 2]>,
     /// Side or fixed constraint.
     pub constraint: Vec<VertexConstraint>,
-    /// Position at mesh time [m].
+    /// Position at mesh time \[m\].
     pub reference: Vec<[f64; 2]>,
 }
 
@@ -157,11 +157,11 @@ impl VertexAnchors {
 /// The DEM state of the circles (same order as at mesh time), borrowed from the caller.
 #[derive(Debug, Clone, Copy)]
 pub struct CircleMotion<'a> {
-    /// Centres [m].
+    /// Centres \[m\].
     pub centre: &'a [[f64; 2]],
-    /// Radii [m].
+    /// Radii \[m\].
     pub radius: &'a [f64],
-    /// Angle turned counter-clockwise since the mesh was built [rad].
+    /// Angle turned counter-clockwise since the mesh was built \[rad\].
     pub rotation: &'a [f64],
     /// Centre velocities [m/s].
     pub velocity: &'a [[f64; 2]],

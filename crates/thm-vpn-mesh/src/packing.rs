@@ -16,13 +16,13 @@ use crate::mesher::{Circle, Contact};
 /// How to generate a packing.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PackingSpec {
-    /// Lower-left corner of the box [m].
+    /// Lower-left corner of the box \[m\].
     pub box_min: [f64; 2],
-    /// Upper-right corner of the box [m].
+    /// Upper-right corner of the box \[m\].
     pub box_max: [f64; 2],
-    /// Smallest diameter [m].
+    /// Smallest diameter \[m\].
     pub d_min: f64,
-    /// Largest diameter [m].
+    /// Largest diameter \[m\].
     pub d_max: f64,
     /// Total circle area over box area before relaxation [-].
     pub nominal_fraction: f64,
@@ -161,7 +161,7 @@ pub fn cut_circle_area(circles: &[Circle], i: usize) -> Option<f64> {
 }
 
 /// Every overlapping pair as a contact, with normal stress `stiffness × overlap / (r_a + r_b)`
-/// [Pa] (a stand-in for the DEM's contact stress).
+/// \[Pa\] (a stand-in for the DEM's contact stress).
 pub fn overlap_contacts(circles: &[Circle], stiffness: f64) -> Vec<Contact> {
     crate::mesher::overlapping_pairs(circles)
         .into_iter()

@@ -32,7 +32,7 @@ pub const CHANNEL_COLOUR: [u8; 3] = [20, 60, 150];
 pub struct PictureStyle {
     /// Title above the picture.
     pub title: String,
-    /// Image width [px]; the height follows at equal axis scales.
+    /// Image width \[px\]; the height follows at equal axis scales.
     pub width_px: u32,
     /// Draw the fluid channels (T2T and S2S) between cell centroids.
     pub channels: bool,

@@ -88,7 +88,7 @@ fn orient(p0: [f64; 2], p1: [f64; 2], q: [f64; 2]) -> f64 {
     (p1[0] - p0[0]) * (q[1] - p0[1]) - (p1[1] - p0[1]) * (q[0] - p0[0])
 }
 
-/// Area of the intersection of two counter-clockwise triangles [m²].
+/// Area of the intersection of two counter-clockwise triangles \[m²\].
 ///
 /// Both triangles are first moved to a local origin (`a`'s first corner), so the result
 /// does not lose digits to the distance from the global origin. The nine orientations of
@@ -97,7 +97,7 @@ fn orient(p0: [f64; 2], p1: [f64; 2], q: [f64; 2]) -> f64 {
 /// Otherwise `a` is clipped by the edges of `b` that cut it (Sutherland–Hodgman) in two
 /// fixed-size buffers, with no allocation, and the area is that of the clipped polygon.
 ///
-/// Each clipping step is compiled once per polygon size ([`clip_by_edge`] is generic over
+/// Each clipping step is compiled once per polygon size (`clip_by_edge` is generic over
 /// it), so its loops are unrolled; a polygon vertex is written whether or not it is kept
 /// and kept by advancing the output count. The steps, their order and the arithmetic are
 /// those of a generic loop over the vertices, so the area is the same bit for bit.
