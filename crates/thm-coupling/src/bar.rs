@@ -235,17 +235,13 @@ pub const END_HOLD_DEPTH: f64 = 1e-3;
 /// shows them black). Returns how many were held.
 pub fn hold_ends(dem: &mut DemState) -> usize {
     let p = &mut dem.particles;
-    let mut held = 0;
-    for i in 0..p.len() {
-        let (y, r) = (p.position[i].y, p.radius[i]);
-        if y - r < END_HOLD_DEPTH || y + r > BAR_LENGTH - END_HOLD_DEPTH {
-            p.fixed[i] = true;
-            p.velocity[i] = Vec3::new(0.0, 0.0, 0.0);
-            p.angular_velocity[i] = Vec3::new(0.0, 0.0, 0.0);
-            held += 1;
-        }
+    let [bottom, top] = p.near_ends(0.0, BAR_LENGTH, END_HOLD_DEPTH);
+    for &i in bottom.iter().chain(&top) {
+        p.fixed[i] = true;
+        p.velocity[i] = Vec3::new(0.0, 0.0, 0.0);
+        p.angular_velocity[i] = Vec3::new(0.0, 0.0, 0.0);
     }
-    held
+    bottom.len() + top.len()
 }
 
 /// Cells crossed by the vertical centreline x = W/2.

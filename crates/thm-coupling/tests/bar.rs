@@ -206,3 +206,35 @@ fn a_coupled_step_above_the_explicit_flow_limit_names_the_limit_and_the_pore() {
         .step(&mut s, 1.0)
         .expect("implicit flow takes the step");
 }
+
+/// Case a holds the spheres within 1 mm of either end (both ends get some) and frees the
+/// rest: after coupled steps with a free skeleton, the held spheres have not moved at all,
+/// while the fluid and contact forces move the others.
+#[test]
+fn case_a_holds_the_end_spheres_and_frees_the_others() {
+    use thm_coupling::bar::{BAR_LENGTH, END_HOLD_DEPTH};
+    let case = BarCase::ContractionFree;
+    let config = bar_params(case, 16).validate().expect("parameters");
+    let mut s = bar_state(case, &config, 1, &water_air()).expect("state");
+    let p = &s.dem.particles;
+    let held: Vec<usize> = (0..p.len()).filter(|&i| p.fixed[i]).collect();
+    let near = |i: usize, bottom: bool| {
+        if bottom {
+            p.position[i].y - p.radius[i] < END_HOLD_DEPTH
+        } else {
+            p.position[i].y + p.radius[i] > BAR_LENGTH - END_HOLD_DEPTH
+        }
+    };
+    assert!(held.iter().any(|&i| near(i, true)) && held.iter().any(|&i| near(i, false)));
+    assert!(held.iter().all(|&i| near(i, true) || near(i, false)));
+    assert!((0..p.len()).all(|i| p.fixed[i] || !(near(i, true) || near(i, false))));
+    let start = p.position.clone();
+    let mut stepper = PoreScaleStepper::new(config, water_air(), &s).expect("stepper");
+    for _ in 0..2 {
+        stepper.step(&mut s, 1e-4).expect("step");
+    }
+    let p = &s.dem.particles;
+    for (i, (now, before)) in p.position.iter().zip(&start).enumerate() {
+        assert_eq!(now != before, !p.fixed[i], "sphere {i}");
+    }
+}

@@ -81,6 +81,22 @@ pub struct ParticleState {
 }
 
 impl ParticleState {
+    /// The particles whose surface lies within `depth` \[m\] of the plane `y = y_bottom`
+    /// (first list) or `y = y_top` (second), in index order; one near both ends is in the
+    /// first. The ends a bar test grips or a coupled case holds.
+    pub fn near_ends(&self, y_bottom: f64, y_top: f64, depth: f64) -> [Vec<usize>; 2] {
+        let (mut bottom, mut top) = (Vec::new(), Vec::new());
+        for i in 0..self.len() {
+            let (y, r) = (self.position[i].y, self.radius[i]);
+            if y - r < y_bottom + depth {
+                bottom.push(i);
+            } else if y + r > y_top - depth {
+                top.push(i);
+            }
+        }
+        [bottom, top]
+    }
+
     /// Particles at rest from centres and radii, of uniform density \[kg/m³\] and temperature
     /// \[K\]. Plane kinematics put the centres into `z = 0`.
     pub fn new(

@@ -335,19 +335,12 @@ impl BarTension {
         crate::error::check_range("y_top", y_top, y_bottom, f64::MAX, "above y_bottom")?;
         let mut state = packing.to_state(density, 293.15)?;
         let p = &mut state.particles;
-        let (mut bottom, mut top) = (Vec::new(), Vec::new());
-        for i in 0..p.len() {
-            let v = if p.position[i].y - p.radius[i] < y_bottom + loading.grip_depth {
-                bottom.push(i);
-                -loading.plate_speed
-            } else if p.position[i].y + p.radius[i] > y_top - loading.grip_depth {
-                top.push(i);
-                loading.plate_speed
-            } else {
-                continue;
-            };
-            p.velocity[i] = Vec3::new(0.0, v, 0.0);
-            p.fixed[i] = loading.grip == Grip::Clamped;
+        let [bottom, top] = p.near_ends(y_bottom, y_top, loading.grip_depth);
+        for (ends, v) in [(&bottom, -loading.plate_speed), (&top, loading.plate_speed)] {
+            for &i in ends {
+                p.velocity[i] = Vec3::new(0.0, v, 0.0);
+                p.fixed[i] = loading.grip == Grip::Clamped;
+            }
         }
         if bottom.is_empty() || top.is_empty() {
             return Err(DemError::InvalidParameter {
