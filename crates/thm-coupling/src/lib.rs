@@ -21,7 +21,9 @@
 //!    (A-Eqs. 43–45); the pores are then closed again at their new temperatures;
 //! 7. volume-average sphere temperatures to radii (A-Eq. 55);
 //! 8. remesh on the trigger of `thm-vpn-mesh` and conservative remap of liquid mass, gas mass,
-//!    fluid energy and solid energy.
+//!    fluid energy and solid energy (new pores the old fluid did not cover are filled from
+//!    their channel neighbours, pores it overfilled are levelled with theirs); a pore that one
+//!    mesh motion more than halves, or any cell it inverts, forces this stage before stage 5.
 //!
 //! A fixed skeleton (A-Sect. 6 case b, the fluid–heat cases of A-Sects. 4–5) is
 //! [`pore_scale::Skeleton::Fixed`]: the same step without stages 2–4, 7 and 8.
@@ -34,12 +36,13 @@
 //! 2. **Volume rate.** dV/dt of a pore is `(V_mesh^{n+1} − V_flow^n)/Δt_C`, not the
 //!    instantaneous rate of the vertex velocities, so the flow's pore volumes never drift from
 //!    the mesh's.
-//! 3. **Energy with changing mass.** A-Eq. 39 updates `ρ E V` from `n` to `n + 1`. The heat
-//!    solver holds a cell's capacity fixed over a step, so the coupling first re-expresses each
-//!    temperature at the new capacity (`T ← T_ref + C^n/C^{n+1} (T − T_ref)`), which with the
-//!    advective enthalpy `ṁ c_p (T_f − T_ref)` of the same mass fluxes conserves `Σ C (T − T_ref)`
-//!    exactly; the same holds for solid cells whose volume changed (the solid keeps its mass in
-//!    A-Eq. 55 while the heat solver uses `ρ_s V`).
+//! 3. **Energy with changing mass.** A-Eq. 39 updates `ρ E V` from `n` to `n + 1`. The
+//!    implicit heat step balances `C^{n+1}(T^{n+1} − T_ref) − C^n (T^n − T_ref)` against the
+//!    step's fluxes; the explicit one first re-expresses each temperature at the new capacity
+//!    (`T ← T_ref + C^n/C^{n+1} (T − T_ref)`). With the advective enthalpy
+//!    `ṁ c_p (T_f − T_ref)` of the same mass fluxes both conserve `Σ C (T − T_ref)` exactly.
+//!    A sphere keeps the heat capacity of its mass while A-Eq. 55 shrinks it: its solid cells
+//!    share `ρ_s c_s A_ref b` by area, `A_ref` its solid area in the first mesh.
 //! 4. **Contacts of the mesh.** Every overlapping pair of circles is a mesh contact; its σ_n is
 //!    that of the DEM contact of the pair (zero where the DEM has no active contact).
 //! 5. **Remap.** Pressures and fractions are not remapped: they follow from the remapped masses
@@ -68,8 +71,9 @@
 //! ## Status
 //!
 //! In place: the pore-scale step, implicit pressure and heat steps for long runs, the bar
-//! cases of A-Sects. 4, 5 and 6 case b (also as the `thm run` kind `pore_scale_bar`). Not yet
-//! here: the Péclet numbers of A-Sect. 5 and the MPM×DEM scheme.
+//! cases of A-Sects. 4, 5 and 6 case b (also as the `thm run` kind `pore_scale_bar`). Set up
+//! but not yet running to its end: A-Sect. 6 case a ([`bar::BarCase::ContractionFree`]). Not
+//! yet here: the MPM×DEM scheme.
 //!
 //! ## Verification ([`verification::cases`])
 //!
@@ -78,12 +82,12 @@
 //!   remeshed almost every step and with a fixed skeleton, explicit and implicit.
 //! - `coupling/bar_cooling_advection`: A-Sects. 4–5, the liquid mass against the reservoir
 //!   inflow to 10⁻¹², the thermal energy against the energy through the boundary
-//!   (`StepReport::boundary_energy`) to 10⁻¹⁰, the time-step rule (halving Δt_C = 1 s moves T_max by < 0.05 K), and the
-//!   paper's 0.52 K, density range and advection differences as reported rows.
+//!   (`StepReport::boundary_energy`) to 10⁻¹⁰, the time-step rule (halving Δt_C = 1 s moves
+//!   T_max by < 0.05 K), and the paper's 0.52 K, density range, speeds, Péclet numbers and
+//!   advection differences as reported rows.
 //! - `coupling/bar_contraction_fixed`: A-Sect. 6 case b, phase masses to 10⁻¹², the energy
-//!   balance to 10⁻¹⁰, the
-//!   time-step rule (halving Δt_C = 0.1 s moves T_max by < 0.1 K), and the paper's 333.3 K and
-//!   73.0 kPa as reported rows.
+//!   balance to 10⁻¹⁰, the time-step rule (halving Δt_C = 0.1 s moves T_max by < 0.1 K), and
+//!   the paper's 333.3 K and 73.0 kPa as reported rows.
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 

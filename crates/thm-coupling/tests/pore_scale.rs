@@ -7,6 +7,7 @@ use common::*;
 use thm_coupling::pore_scale::{
     CouplingError, InitialFluid, PoreScaleState, Skeleton, dem_substeps, stages,
 };
+use thm_vpn_flow::SECOND_END;
 use thm_vpn_mesh::{NONE, RemeshCriteriaParams};
 
 /// Steps a fresh run; returns the state and the number of remeshes.
@@ -456,16 +457,22 @@ fn overfilled_pores_spill_to_their_neighbours_conserving_mass_and_energy() {
         mp[c] = s.flow.gas_mass[q];
         ef[c] = 2.0 * (mq[c] + mp[c]);
     }
-    // The pore with the most channels.
-    let mut degree = vec![0usize; network.n_pores()];
-    for &[a, b] in &network.parts().channel_pores {
-        for p in [a, b] {
-            if let Some(d) = degree.get_mut(p as usize) {
-                *d += 1;
-            }
-        }
-    }
-    let squeezed = (0..degree.len()).max_by_key(|&q| degree[q]).expect("pores");
+    // The pore with the most channels, and every pore's channel neighbours.
+    let neighbours: Vec<Vec<usize>> = (0..network.n_pores())
+        .map(|q| {
+            network
+                .pore_channels(q)
+                .iter()
+                .map(|&k| {
+                    let [a, b] = network.parts().channel_pores[(k & !SECOND_END) as usize];
+                    (if k & SECOND_END != 0 { a } else { b }) as usize
+                })
+                .collect()
+        })
+        .collect();
+    let squeezed = (0..neighbours.len())
+        .max_by_key(|&q| neighbours[q].len())
+        .expect("pores");
     let rho0 = (mq[cell(squeezed)] + mp[cell(squeezed)]) / s.flow.volume[squeezed];
     let rho0 = rho0 * 3.0;
     for field in [&mut mq, &mut mp, &mut ef] {
@@ -485,14 +492,6 @@ fn overfilled_pores_spill_to_their_neighbours_conserving_mass_and_energy() {
     // No pore is left above 1.2 times the smaller of its group's and the network's mean
     // density while a neighbour lies below it; the squeezed pore came down from 3 times.
     let density = |q: usize| (mq[cell(q)] + mp[cell(q)]) / s.flow.volume[q];
-    let mut neighbours = vec![Vec::new(); network.n_pores()];
-    for &[a, b] in &network.parts().channel_pores {
-        let (a, b) = (a as usize, b as usize);
-        if a < neighbours.len() && b < neighbours.len() && a != b {
-            neighbours[a].push(b);
-            neighbours[b].push(a);
-        }
-    }
     let global = (after[0] + after[1]) / s.flow.volume.iter().sum::<f64>();
     for q in 0..network.n_pores() {
         let (m, v) = neighbours[q].iter().fold((0.0, 0.0), |(m, v), &j| {

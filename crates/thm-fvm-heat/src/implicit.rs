@@ -44,8 +44,9 @@ impl HeatStepper {
     /// [`Self::implicit_step`] for cells whose heat capacity changed over the step (fluid
     /// that flowed in or out, a cell that moved): the energy balance is
     /// `C^{n+1} (T^{n+1} − T_ref) − C^n (T^n − T_ref) = dt × (fluxes at T^{n+1})`, with
-    /// `C^{n+1}` from `input` and `C^n = old_capacity` \[J/K\]. With first-order upwind
-    /// advection at T^{n+1}, a cell that only loses mass keeps its temperature.
+    /// `C^{n+1}` from `input`, `C^n = old_capacity` \[J/K\] and `T_ref` the model's reference
+    /// temperature (the one the advected enthalpy uses). With first-order upwind advection at
+    /// T^{n+1}, a cell that only loses mass keeps its temperature.
     #[allow(clippy::too_many_arguments)]
     pub fn implicit_step_with_old_capacity(
         &mut self,
@@ -55,7 +56,6 @@ impl HeatStepper {
         input: &FlowInput,
         state: &mut HeatState,
         old_capacity: &[f64],
-        reference_temperature: f64,
         dt: f64,
     ) -> Result<(), HeatError> {
         if old_capacity.len() != mesh.n_cells() {
@@ -76,15 +76,7 @@ impl HeatStepper {
                 value: old_capacity[c],
             });
         }
-        self.implicit_step_inner(
-            model,
-            geometry,
-            mesh,
-            input,
-            state,
-            Some((old_capacity, reference_temperature)),
-            dt,
-        )
+        self.implicit_step_inner(model, geometry, mesh, input, state, Some(old_capacity), dt)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -95,7 +87,7 @@ impl HeatStepper {
         mesh: &PoreMesh,
         input: &FlowInput,
         state: &mut HeatState,
-        old: Option<(&[f64], f64)>,
+        old: Option<&[f64]>,
         dt: f64,
     ) -> Result<(), HeatError> {
         if !(dt.is_finite() && dt > 0.0) {
@@ -116,9 +108,12 @@ impl HeatStepper {
         let temp = &state.temperature;
         let mut rhs: Vec<f64> = match old {
             None => (0..n).map(|c| self.capacity[c] / dt * temp[c]).collect(),
-            Some((c_old, t_ref)) => (0..n)
-                .map(|c| (c_old[c] * (temp[c] - t_ref) + self.capacity[c] * t_ref) / dt)
-                .collect(),
+            Some(c_old) => {
+                let t_ref = model.reference_temperature;
+                (0..n)
+                    .map(|c| (c_old[c] * (temp[c] - t_ref) + self.capacity[c] * t_ref) / dt)
+                    .collect()
+            }
         };
         let mut diag: Vec<f64> = (0..n).map(|c| self.capacity[c] / dt).collect();
         let mut off: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(mesh.n_faces() + n);

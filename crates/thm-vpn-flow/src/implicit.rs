@@ -82,7 +82,7 @@ impl FlowStepper {
     /// Advances `state` by `dt` \[s\] with backward-Euler sub-steps (see the module doc): one
     /// sub-step of `dt` unless it is rejected, then halved until it is accepted and doubled
     /// again after each accepted one (at most `max_substeps` tries in all, none shorter than
-    /// `MIN_SUBSTEP_FRACTION` of `dt`). `dv_dt` as in [`Self::step`]. The report's
+    /// [`MIN_SUBSTEP_FRACTION`] of `dt`). `dv_dt` as in [`Self::step`]. The report's
     /// `smallest_substep` is the shortest accepted sub-step.
     pub fn implicit_step(
         &mut self,

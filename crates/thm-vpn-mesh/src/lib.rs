@@ -186,7 +186,7 @@ pub use mesher::{
 };
 pub use motion::{
     CircleMotion, MeshMotion, RemeshCriteria, RemeshCriteriaParams, RemeshReason, VertexAnchors,
-    VertexConstraint, remesh_needed,
+    VertexConstraint, inverted_cell, remesh_needed,
 };
 pub use picture::{PictureStyle, write_mesh_png};
 pub use remap::{CellFilter, RemapOperator};

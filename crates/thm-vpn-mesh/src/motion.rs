@@ -671,13 +671,10 @@ pub fn remesh_needed(
             return Ok(Some(RemeshReason::NewOverlap { pair: key }));
         }
     }
-    if let Some(cell) = pm
-        .mesh
-        .cell_area
-        .iter()
-        .position(|&a| a.is_nan() || a <= 0.0)
-    {
-        return Ok(Some(RemeshReason::InvertedCell { cell }));
-    }
-    Ok(None)
+    Ok(inverted_cell(&pm.mesh).map(|cell| RemeshReason::InvertedCell { cell }))
+}
+
+/// The first cell of `mesh` turned inside out (area ≤ 0 or not a number), if any.
+pub fn inverted_cell(mesh: &PoreMesh) -> Option<usize> {
+    mesh.cell_area.iter().position(|&a| a.is_nan() || a <= 0.0)
 }

@@ -414,7 +414,6 @@ pub fn dem_substeps(dt_dem: f64, dt: f64) -> (f64, u64) {
     (dt / n as f64, n)
 }
 
-/// The parts of the stepper that follow from the state's mesh.
 impl<F: PoreFluid> PoreScaleStepper<F> {
     /// Stage 8 (or a remesh forced by `forced`): when the criteria or `forced` ask, a new mesh
     /// of the spheres as they are, the conservative remap of the fluid masses and energies,
@@ -456,6 +455,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
     }
 }
 
+/// The parts of the stepper that follow from the state's mesh.
 fn derived(
     config: &PoreScaleConfig,
     state: &PoreScaleState,

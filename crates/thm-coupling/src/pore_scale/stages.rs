@@ -6,7 +6,9 @@ use thm_fvm_heat::{
     FlowInput, HeatGeometry, HeatModel, HeatParams, HeatState, HeatStepper,
     sphere_mean_temperatures,
 };
-use thm_vpn_flow::{FlowConfig, FlowState, FlowStepper, Network, PoreFluid, add_sphere_forces};
+use thm_vpn_flow::{
+    FlowConfig, FlowState, FlowStepper, Network, PoreFluid, SECOND_END, add_sphere_forces,
+};
 use thm_vpn_mesh::{
     CellFilter, CircleMotion, Contact, MeshMotion, MeshSettings, PackingMesh, RemapOperator,
     RemeshCriteria, RemeshReason, S2sApertureParams, mesh_packing, remesh_needed,
@@ -331,7 +333,6 @@ pub fn heat_stage(
                     input,
                     heat,
                     old,
-                    t_ref,
                     dt,
                 )
                 .map_err(CouplingError::Heat)?;
@@ -465,12 +466,10 @@ pub fn remesh(
     let op = RemapOperator::new(old_mesh, &new.mesh).map_err(CouplingError::Mesh)?;
     let (no, nn) = (old_mesh.n_cells(), new.mesh.n_cells());
     let t_ref = heat_params.reference_temperature;
-    let solid_rc = heat_params.solid.density * heat_params.solid.specific_heat;
     // Old extensive fields per cell.
     let mut mq = vec![0.0; no];
     let mut mp = vec![0.0; no];
     let mut e_fluid = vec![0.0; no];
-    let mut e_solid = vec![0.0; no];
     for (q, &c) in network.pore_cell().iter().enumerate() {
         let c = c as usize;
         mq[c] = state.flow.liquid_mass[q];
@@ -478,28 +477,20 @@ pub fn remesh(
         e_fluid[c] =
             fluid_capacity(mq[c], mp[c], heat_params) * (state.heat.temperature[c] - t_ref);
     }
-    let old_scale = super::state::solid_capacity_scale(old_mesh, &state.solid_area_ref);
-    let owner_scale = |scale: &[f64], kind: thm_vpn_mesh::CellKind| match kind {
-        thm_vpn_mesh::CellKind::Solid { owner } => {
-            scale.get(owner as usize).copied().unwrap_or(1.0)
-        }
-        thm_vpn_mesh::CellKind::Fluid => 1.0,
-    };
-    for (c, e) in e_solid.iter_mut().enumerate() {
-        if !old_mesh.cell_kind[c].is_fluid() {
-            *e = solid_rc
-                * old_mesh.cell_volume(c)
-                * owner_scale(&old_scale, old_mesh.cell_kind[c])
-                * (state.heat.temperature[c] - t_ref);
-        }
-    }
+    let old_solid =
+        super::state::solid_cell_capacities(old_mesh, heat_params, &state.solid_area_ref);
+    let e_solid: Vec<f64> = old_solid
+        .iter()
+        .zip(&state.heat.temperature)
+        .map(|(c, t)| c * (t - t_ref))
+        .collect();
     let remap = |filter, old: &[f64]| -> Result<Vec<f64>, CouplingError> {
         let mut out = vec![0.0; nn];
         op.apply(filter, old, &mut out)
             .map_err(CouplingError::Mesh)?;
         Ok(out)
     };
-    let (nq, np_, nef, nes) = (
+    let (mut nq, mut np_, mut nef, nes) = (
         remap(CellFilter::Fluid, &mq)?,
         remap(CellFilter::Fluid, &mp)?,
         remap(CellFilter::Fluid, &e_fluid)?,
@@ -508,7 +499,6 @@ pub fn remesh(
     let new_network = Network::from_mesh(&new.mesh, boundaries, boundary_reduction_factor)
         .map_err(CouplingError::Flow)?;
     let volume = new_network.pore_volumes(&new.mesh);
-    let (mut nq, mut np_, mut nef) = (nq, np_, nef);
     fill_uncovered_pores(
         &new_network,
         &volume,
@@ -517,12 +507,11 @@ pub fn remesh(
     )?;
     spill_overfilled_pores(&new_network, &volume, [&mut nq, &mut np_, &mut nef]);
     let mut temperature = vec![t_ref; nn];
-    let new_scale = super::state::solid_capacity_scale(&new.mesh, &state.solid_area_ref);
+    let new_solid =
+        super::state::solid_cell_capacities(&new.mesh, heat_params, &state.solid_area_ref);
     for c in 0..nn {
         if !new.mesh.cell_kind[c].is_fluid() {
-            let cap =
-                solid_rc * new.mesh.cell_volume(c) * owner_scale(&new_scale, new.mesh.cell_kind[c]);
-            temperature[c] = t_ref + nes[c] / cap;
+            temperature[c] = t_ref + nes[c] / new_solid[c];
         }
     }
     let pores = new_network.n_pores();
@@ -586,11 +575,7 @@ pub fn shrinking_pore(
     mesh: &PackingMesh,
     flow: &FlowState,
 ) -> Option<RemeshReason> {
-    let inverted = |c: &usize| {
-        let a = mesh.mesh.cell_area[*c];
-        a.is_nan() || a <= 0.0
-    };
-    if let Some(cell) = (0..mesh.mesh.n_cells()).find(inverted) {
+    if let Some(cell) = thm_vpn_mesh::inverted_cell(&mesh.mesh) {
         return Some(RemeshReason::InvertedCell { cell });
     }
     network
@@ -599,18 +584,19 @@ pub fn shrinking_pore(
         .zip(&flow.volume)
         .find_map(|(&c, &v)| {
             let cell = c as usize;
-            let now = mesh.mesh.cell_volume(cell);
-            if now <= 0.0 {
-                Some(RemeshReason::InvertedCell { cell })
-            } else if now < SHRINK_REMESH_RATIO * v {
-                Some(RemeshReason::ShrunkCell {
-                    cell,
-                    value: now / v,
-                })
-            } else {
-                None
-            }
+            let value = mesh.mesh.cell_volume(cell) / v;
+            (value < SHRINK_REMESH_RATIO).then_some(RemeshReason::ShrunkCell { cell, value })
         })
+}
+
+/// The pores joined to pore `p` by a channel (the network's own adjacency).
+fn neighbour_pores(network: &Network, p: usize) -> impl Iterator<Item = usize> + '_ {
+    let ends = &network.parts().channel_pores;
+    network.pore_channels(p).iter().filter_map(move |&k| {
+        let [a, b] = ends[(k & !SECOND_END) as usize];
+        let other = if k & SECOND_END != 0 { a } else { b } as usize;
+        (other != p).then_some(other)
+    })
 }
 
 /// A new pore whose remapped fluid density is above this multiple of its group's (itself
@@ -623,13 +609,15 @@ pub const OVERFILLED_DENSITY_RATIO: f64 = 1.2;
 pub const MAX_SPILL_PASSES: usize = 10_000;
 
 /// Spills the excess of new pores that the remap overfilled (fluid of an old pore that the
-/// skeleton squeezed within one step, which the flow had no time to move): each such pore,
-/// in index order, keeps the mean density `ρ_g = (m_e + Σ m_j)/(V_e + Σ V_j)` and
-/// gives the rest, with its own liquid/gas split and specific energy, to the pores its
-/// channels join in proportion to their volumes (the target is the smaller of the group's
-/// and the whole network's mean density, so a squeezed cluster spreads outwards over the
-/// passes). Every total is kept to round-off. `fields`
-/// are cell-indexed (liquid mass, gas mass, fluid energy). Returns the pores spilled.
+/// skeleton squeezed within one step, which the flow had no time to move). A pore is
+/// overfilled when its density is above [`OVERFILLED_DENSITY_RATIO`] times the smaller of its
+/// group's (itself and the pores its channels join) and the whole network's mean density.
+/// Each such pore, in index order, levels itself with its lower neighbours: with `ρ_g` the
+/// common density of the pore and the neighbours below `ρ_g`, it keeps `ρ_g V_e` and each of
+/// them receives `(ρ_g − ρ_j) V_j`, all with the pore's liquid/gas split and specific energy.
+/// Passes repeat until none spills (at most [`MAX_SPILL_PASSES`]), so a squeezed cluster
+/// spreads outwards one channel layer per pass. Every total is kept to round-off. `fields`
+/// are cell-indexed (liquid mass, gas mass, fluid energy). Returns the levellings made.
 pub fn spill_overfilled_pores(
     network: &Network,
     volume: &[f64],
@@ -637,77 +625,62 @@ pub fn spill_overfilled_pores(
 ) -> usize {
     let cell = network.pore_cell();
     let n = cell.len();
-    let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); n];
-    for &[a, b] in &network.parts().channel_pores {
-        let (a, b) = (a as usize, b as usize);
-        if a < n && b < n && a != b {
-            neighbours[a].push(b);
-            neighbours[b].push(a);
-        }
-    }
     let [mq, mp, ef] = fields;
-    let total_volume: f64 = volume.iter().sum();
-    let global = cell
-        .iter()
-        .map(|&c| mq[c as usize] + mp[c as usize])
-        .sum::<f64>()
-        / total_volume;
+    let mass = |q: usize, mq: &[f64], mp: &[f64]| {
+        let c = cell[q] as usize;
+        mq[c] + mp[c]
+    };
+    let density = |q: usize, mq: &[f64], mp: &[f64]| mass(q, mq, mp) / volume[q];
+    let global = (0..n).map(|q| mass(q, mq, mp)).sum::<f64>() / volume.iter().sum::<f64>();
     let mut spilled = 0;
-    // Passes until nothing spills: a squeezed region spreads over a few channel layers.
+    let mut lower: Vec<usize> = Vec::new();
+    let mut gift: Vec<f64> = Vec::new();
     for _pass in 0..MAX_SPILL_PASSES {
         let before = spilled;
         for e in 0..n {
-            let ce = cell[e] as usize;
-            let m_e = mq[ce] + mp[ce];
-            let (m_nb, v_nb) = neighbours[e].iter().fold((0.0, 0.0), |(m, v), &j| {
-                let cj = cell[j] as usize;
-                (m + mq[cj] + mp[cj], v + volume[j])
-            });
+            let m_e = mass(e, mq, mp);
+            let (m_nb, v_nb) = neighbour_pores(network, e)
+                .fold((0.0, 0.0), |(m, v), j| (m + mass(j, mq, mp), v + volume[j]));
             if v_nb <= 0.0 || m_e <= 0.0 {
                 continue;
             }
+            let rho_e = m_e / volume[e];
             let target = global.min((m_e + m_nb) / (volume[e] + v_nb));
-            let density = |q: usize, mq: &[f64], mp: &[f64]| {
-                let c = cell[q] as usize;
-                (mq[c] + mp[c]) / volume[q]
-            };
-            if density(e, mq, mp) <= OVERFILLED_DENSITY_RATIO * target {
+            if rho_e <= OVERFILLED_DENSITY_RATIO * target {
                 continue;
             }
-            // Level e with the neighbours below the common density ρ_g of e and those
-            // neighbours (found by dropping the ones above it until none is): e keeps
-            // ρ_g V_e, each such neighbour j receives (ρ_g − ρ_j) V_j, which add up to e's
-            // excess; all of it with e's liquid/gas split and specific energy.
-            let mut lower: Vec<usize> = neighbours[e]
-                .iter()
-                .copied()
-                .filter(|&j| density(j, mq, mp) < density(e, mq, mp))
-                .collect();
-            let mut level = 0.0;
-            for _ in 0..lower.len() + 1 {
+            // The level ρ_g of e and its lower neighbours, dropping those above it until none
+            // is: e keeps ρ_g V_e and each remaining neighbour j receives (ρ_g − ρ_j) V_j,
+            // which add up to e's excess.
+            lower.clear();
+            lower.extend(neighbour_pores(network, e).filter(|&j| density(j, mq, mp) < rho_e));
+            // Each pass drops at least one neighbour or ends.
+            let level = loop {
                 let (m, v) = lower.iter().fold((m_e, volume[e]), |(m, v), &j| {
-                    let cj = cell[j] as usize;
-                    (m + mq[cj] + mp[cj], v + volume[j])
+                    (m + mass(j, mq, mp), v + volume[j])
                 });
-                level = m / v;
-                let before = lower.len();
+                let level = m / v;
+                let kept = lower.len();
                 lower.retain(|&j| density(j, mq, mp) < level);
-                if lower.len() == before {
-                    break;
+                if lower.len() == kept {
+                    break level;
                 }
-            }
+            };
             if lower.is_empty() {
                 continue;
             }
-            let gift: Vec<f64> = lower
-                .iter()
-                .map(|&j| (level - density(j, mq, mp)) * volume[j])
-                .collect();
+            gift.clear();
+            gift.extend(
+                lower
+                    .iter()
+                    .map(|&j| (level - density(j, mq, mp)) * volume[j]),
+            );
+            let total: f64 = gift.iter().sum();
             let f = 1.0 - level * volume[e] / m_e;
+            let ce = cell[e] as usize;
             for field in [&mut *mq, &mut *mp, &mut *ef] {
                 let out = f * field[ce];
                 field[ce] -= out;
-                let total: f64 = gift.iter().sum();
                 for (&j, &g) in lower.iter().zip(&gift) {
                     field[cell[j] as usize] += out * g / total;
                 }
@@ -743,14 +716,6 @@ pub fn fill_uncovered_pores(
 ) -> Result<usize, CouplingError> {
     let cell = network.pore_cell();
     let n = cell.len();
-    let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); n];
-    for &[a, b] in &network.parts().channel_pores {
-        let (a, b) = (a as usize, b as usize);
-        if a < n && b < n && a != b {
-            neighbours[a].push(b);
-            neighbours[b].push(a);
-        }
-    }
     let [mq, mp, ef] = fields;
     let mass = |q: usize, mq: &[f64], mp: &[f64]| {
         let c = cell[q] as usize;
@@ -763,9 +728,8 @@ pub fn fill_uncovered_pores(
         let mut remaining = 0;
         for e in 0..n {
             let density_e = mass(e, mq, mp) / volume[e];
-            let (m_nb, v_nb) = neighbours[e].iter().fold((0.0, 0.0), |(m, v), &j| {
-                (m + mass(j, mq, mp), v + volume[j])
-            });
+            let (m_nb, v_nb) = neighbour_pores(network, e)
+                .fold((0.0, 0.0), |(m, v), j| (m + mass(j, mq, mp), v + volume[j]));
             if v_nb <= 0.0 || m_nb <= 0.0 {
                 if density_e.is_nan() || density_e <= 0.0 {
                     remaining += 1;
@@ -777,7 +741,7 @@ pub fn fill_uncovered_pores(
             }
             let f = volume[e] / (volume[e] + v_nb);
             let ce = cell[e] as usize;
-            for &j in &neighbours[e] {
+            for j in neighbour_pores(network, e) {
                 let cj = cell[j] as usize;
                 for field in [&mut *mq, &mut *mp, &mut *ef] {
                     let share = f * field[cj];

@@ -75,6 +75,25 @@ pub fn solid_capacity_scale(mesh: &thm_vpn_mesh::PoreMesh, solid_area_ref: &[f64
         .collect()
 }
 
+/// Heat capacity of every solid cell of `mesh` \[J/K\] (0 for fluid cells): `ρ_s c_s V`
+/// times its sphere's [`solid_capacity_scale`].
+pub fn solid_cell_capacities(
+    mesh: &thm_vpn_mesh::PoreMesh,
+    heat: &HeatParams,
+    solid_area_ref: &[f64],
+) -> Vec<f64> {
+    let solid = heat.solid.density * heat.solid.specific_heat;
+    let scale = solid_capacity_scale(mesh, solid_area_ref);
+    (0..mesh.n_cells())
+        .map(|c| match mesh.cell_kind[c] {
+            CellKind::Solid { owner } => {
+                solid * mesh.cell_volume(c) * scale.get(owner as usize).copied().unwrap_or(1.0)
+            }
+            CellKind::Fluid => 0.0,
+        })
+        .collect()
+}
+
 /// The circles of the spheres as the mesher takes them: centre (x, y), radius, owner = the
 /// sphere's index.
 pub fn circles_of(dem: &DemState) -> Vec<Circle> {
@@ -242,16 +261,7 @@ impl PoreScaleState {
 /// solid cells `ρ_s c_s V`.
 pub fn cell_capacities(state: &PoreScaleState, heat: &HeatParams) -> Vec<f64> {
     let mesh = &state.mesh.mesh;
-    let solid = heat.solid.density * heat.solid.specific_heat;
-    let scale = solid_capacity_scale(mesh, &state.solid_area_ref);
-    let mut cap: Vec<f64> = (0..mesh.n_cells())
-        .map(|c| match mesh.cell_kind[c] {
-            CellKind::Solid { owner } => {
-                solid * mesh.cell_volume(c) * scale.get(owner as usize).copied().unwrap_or(1.0)
-            }
-            _ => 0.0,
-        })
-        .collect();
+    let mut cap = solid_cell_capacities(mesh, heat, &state.solid_area_ref);
     let mut p = 0usize;
     for (c, kind) in mesh.cell_kind.iter().enumerate() {
         if kind.is_fluid() {

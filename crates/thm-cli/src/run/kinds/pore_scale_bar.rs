@@ -144,6 +144,21 @@ impl PoreScaleBar {
     }
 }
 
+/// Pore values on the `n` cells of the mesh (`solid` in the cells that are no pore).
+fn pores_to_cells(
+    network: &thm_vpn_flow::Network,
+    n: usize,
+    values: &[f64],
+    solid: f64,
+    out: &mut Vec<f64>,
+) {
+    out.clear();
+    out.resize(n, solid);
+    for (&c, &v) in network.pore_cell().iter().zip(values) {
+        out[c as usize] = v;
+    }
+}
+
 fn range(v: &[f64]) -> [f64; 2] {
     v.iter()
         .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], &x| {
@@ -279,21 +294,29 @@ impl Scenario for PoreScaleBar {
         let mesh = &state.mesh.mesh;
         let n = mesh.n_cells();
         let flow = &state.flow;
-        self.cell_pressure.clear();
-        self.cell_pressure.resize(n, 0.0);
-        self.cell_fraction.clear();
-        self.cell_fraction.resize(n, 0.0);
-        self.cell_liquid_density.clear();
-        self.cell_liquid_density.resize(n, 0.0);
-        self.cell_gas_density.clear();
-        self.cell_gas_density.resize(n, 0.0);
-        for (p, &c) in self.stepper.network().pore_cell().iter().enumerate() {
-            let c = c as usize;
-            self.cell_pressure[c] = flow.pressure[p];
-            self.cell_fraction[c] = flow.liquid_fraction[p];
-            self.cell_liquid_density[c] = flow.liquid_density[p];
-            self.cell_gas_density[c] = flow.gas_density[p];
-        }
+        let network = self.stepper.network();
+        pores_to_cells(network, n, &flow.pressure, 0.0, &mut self.cell_pressure);
+        pores_to_cells(
+            network,
+            n,
+            &flow.liquid_fraction,
+            0.0,
+            &mut self.cell_fraction,
+        );
+        pores_to_cells(
+            network,
+            n,
+            &flow.liquid_density,
+            0.0,
+            &mut self.cell_liquid_density,
+        );
+        pores_to_cells(
+            network,
+            n,
+            &flow.gas_density,
+            0.0,
+            &mut self.cell_gas_density,
+        );
         // Velocity of a fluid cell: the mean over its channels of the channel's speed over the
         // last step along the channel, signed by the flow direction (zero before the first
         // step).
@@ -301,7 +324,6 @@ impl Scenario for PoreScaleBar {
         self.cell_velocity.resize(n, [0.0; 3]);
         self.channels_of_cell.clear();
         self.channels_of_cell.resize(n, 0.0);
-        let network = self.stepper.network();
         let parts = network.parts();
         let mass_rate = &self.stepper.heat_input().channel_mass_flux;
         for (c, speed) in self.stepper.channel_speeds(state).into_iter().enumerate() {
@@ -437,20 +459,19 @@ impl Scenario for PoreScaleBar {
                 .collect(),
             reference,
         };
-        let mut pore_of_cell = vec![usize::MAX; mesh.n_cells()];
-        for (p, &c) in self.stepper.network().pore_cell().iter().enumerate() {
-            pore_of_cell[c as usize] = p;
-        }
+        let mut cell_pressure = Vec::new();
+        pores_to_cells(
+            self.stepper.network(),
+            mesh.n_cells(),
+            &state.flow.pressure,
+            f64::NAN,
+            &mut cell_pressure,
+        );
         let (xs, ps): (Vec<f64>, Vec<f64>) = self
             .centre
             .iter()
-            .filter(|&&c| pore_of_cell[c] != usize::MAX)
-            .map(|&c| {
-                (
-                    mesh.cell_centroid[c][1],
-                    state.flow.pressure[pore_of_cell[c]],
-                )
-            })
+            .filter(|&&c| mesh.cell_kind[c].is_fluid())
+            .map(|&c| (mesh.cell_centroid[c][1], cell_pressure[c]))
             .unzip();
         let pressure = Profile {
             name: "centreline_pore_pressure".into(),
