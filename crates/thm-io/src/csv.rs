@@ -89,7 +89,11 @@ impl CsvHistory {
             return Self::create(path, columns);
         }
         let text = std::fs::read_to_string(path).map_err(|e| IoError::file(path, "read", e))?;
-        let mut lines = text.lines();
+        // Only complete lines count: a run killed while appending leaves a last line without
+        // its newline, whose leading digits could otherwise read as an earlier time.
+        let mut lines = text
+            .split_inclusive('\n')
+            .filter_map(|l| l.strip_suffix('\n'));
         let header = header_line(columns);
         if lines.next() != Some(header.as_str()) {
             return Err(IoError::Malformed {
@@ -99,10 +103,9 @@ impl CsvHistory {
         }
         let kept: Vec<&str> = lines
             .take_while(|l| {
-                l.split(',')
-                    .next()
-                    .and_then(|t| t.parse::<f64>().ok())
-                    .is_some_and(|t| t <= until)
+                let mut values = l.split(',');
+                let time = values.next().and_then(|t| t.parse::<f64>().ok());
+                1 + values.count() == columns.len() && time.is_some_and(|t| t <= until)
             })
             .collect();
         write_atomically(path, |w| {

@@ -84,7 +84,9 @@ pub enum IoError {
         message: String,
     },
     /// A checkpoint written by another version of the checkpoint container format.
-    #[error("{path}: checkpoint format version {found}, this program reads version {expected}")]
+    #[error(
+        "{path}: checkpoint format version {found} (written by {writer}), this program reads version {expected}; resume it with the program that wrote it"
+    )]
     CheckpointFormatVersion {
         /// The file.
         path: PathBuf,
@@ -92,6 +94,32 @@ pub enum IoError {
         found: u32,
         /// Version this program reads.
         expected: u32,
+        /// The program that wrote the file, as its header says.
+        writer: String,
+    },
+    /// A checkpoint that ends early: its writer was stopped before the file was complete.
+    #[error(
+        "{path}: checkpoint is truncated ({len} bytes; {message}); it was not completely written, resume from an earlier checkpoint"
+    )]
+    CheckpointTruncated {
+        /// The file.
+        path: PathBuf,
+        /// Its length \[bytes\].
+        len: u64,
+        /// What shows it is incomplete.
+        message: String,
+    },
+    /// A complete checkpoint whose checksum does not match its content.
+    #[error(
+        "{path}: checkpoint checksum mismatch (stored {stored:08x}, computed {computed:08x}): the file was altered or damaged; resume from another checkpoint"
+    )]
+    CheckpointChecksum {
+        /// The file.
+        path: PathBuf,
+        /// The CRC-32 stored in the file.
+        stored: u32,
+        /// The CRC-32 of the content read.
+        computed: u32,
     },
     /// A checkpoint of another kind of state (another scenario kind or crate).
     #[error("{path}: checkpoint holds a `{found}` state, expected `{expected}`")]
@@ -105,7 +133,7 @@ pub enum IoError {
     },
     /// A checkpoint of the right kind but another version of its state layout.
     #[error(
-        "{path}: `{kind}` checkpoint has state version {found}, this program reads version {expected}"
+        "{path}: `{kind}` checkpoint has state version {found} (written by {writer}), this program reads version {expected}"
     )]
     CheckpointStateVersion {
         /// The file.
@@ -116,6 +144,8 @@ pub enum IoError {
         found: u32,
         /// Version this program reads.
         expected: u32,
+        /// The program that wrote the file, as its header says.
+        writer: String,
     },
     /// The checkpoint header matched but the state could not be decoded.
     #[error("{path}: checkpoint state does not decode: {message}")]

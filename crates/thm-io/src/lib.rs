@@ -13,8 +13,10 @@
 //!   axes labelled with units) with an embedded font, and the plot's curves as CSV.
 //! - [`picture`]: PNG pictures of filled polygons and segments in world coordinates at equal
 //!   axis scales (a mesh coloured by cell type and owner).
-//! - [`checkpoint`]: `serde` save/load of any state with a container version, a kind tag
-//!   and a state layout version; a mismatch is a typed error, never a misread.
+//! - [`checkpoint`]: `serde` save/load of any state with a container version, a kind tag,
+//!   a state layout version and a CRC-32, as one line of JSON for small states and a compact
+//!   binary form for large ones; a mismatch, a truncated file or an altered byte is a typed
+//!   error, never a misread.
 //!
 //! Units: files store what the caller gives (SI throughout the workspace); names of fields
 //! and columns should carry the unit (`temperature [K]`, `radius_m`).
@@ -42,7 +44,8 @@ pub mod pvd;
 pub mod vtu;
 
 pub use checkpoint::{
-    CHECKPOINT_FORMAT_VERSION, checkpoint_kind, load_checkpoint, save_checkpoint,
+    CHECKPOINT_FORMAT_VERSION, CheckpointEncoding, CheckpointInfo, checkpoint_from_bytes,
+    checkpoint_info, checkpoint_kind, load_checkpoint, save_checkpoint, save_checkpoint_as,
 };
 pub use csv::{Column, CsvHistory, write_csv};
 pub use error::IoError;

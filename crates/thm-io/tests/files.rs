@@ -147,6 +147,32 @@ fn csv_header_names_columns_with_units_and_rows_round_trip() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A run killed while appending leaves a last row without its newline; its leading digits
+/// (`10` of `100.5`) must not be read back as a row at an earlier time.
+#[test]
+fn csv_resume_drops_a_row_cut_short_by_a_kill() {
+    let dir = scratch("csv-cut");
+    let path = dir.join("history.csv");
+    let cols = [Column::new("time", "s"), Column::new("x", "m")];
+    std::fs::write(&path, "time [s],x [m]\n99.5,1.0\n100.0,2.0\n10").unwrap();
+    let mut h = CsvHistory::resume(&path, &cols, 100.0).unwrap();
+    h.push(&[100.5, 3.0]).unwrap();
+    h.flush().unwrap();
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap(),
+        "time [s],x [m]\n99.5,1.0\n100.0,2.0\n100.5,3.0\n"
+    );
+    // A complete line with too few values ends the kept rows too.
+    std::fs::write(&path, "time [s],x [m]\n99.5,1.0\n100.0\n").unwrap();
+    drop(h);
+    CsvHistory::resume(&path, &cols, 100.0).unwrap();
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap(),
+        "time [s],x [m]\n99.5,1.0\n"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[derive(Debug, Serialize, Deserialize, PartialEq)]
 struct State {
     step: u64,
@@ -185,21 +211,21 @@ fn checkpoint_round_trips_bitwise_and_rejects_other_versions_and_kinds() {
     let err = load_checkpoint::<State>(&path, "other", 3).unwrap_err();
     assert!(matches!(err, IoError::CheckpointKind { .. }), "{err}");
 
-    // Another container version: rewrite the header's version number.
+    // Another container version: rewrite the header's version number and seal it with a
+    // checksum that matches, as another program version would.
     let text = std::fs::read_to_string(&path).unwrap();
+    let body = &text[..text.rfind(",\"crc32\"").unwrap()];
+    let body = body.replace("\"format_version\":2", "\"format_version\":3");
     let bumped = dir.join("future.ckpt");
-    std::fs::write(
-        &bumped,
-        text.replace("\"format_version\":1", "\"format_version\":2"),
-    )
-    .unwrap();
+    let crc = crc32fast::hash(body.as_bytes());
+    std::fs::write(&bumped, format!("{body},\"crc32\":\"{crc:08x}\"}}\n")).unwrap();
     let err = load_checkpoint::<State>(&bumped, "demo", 3).unwrap_err();
     assert!(
         matches!(
             err,
             IoError::CheckpointFormatVersion {
-                found: 2,
-                expected: 1,
+                found: 3,
+                expected: 2,
                 ..
             }
         ),
@@ -223,7 +249,10 @@ fn checkpoint_round_trips_bitwise_and_rejects_other_versions_and_kinds() {
         Err(IoError::NotACheckpoint { .. })
     ));
     std::fs::write(&junk, &text[..text.len() / 2]).unwrap();
-    assert!(load_checkpoint::<State>(&junk, "demo", 3).is_err());
+    assert!(matches!(
+        load_checkpoint::<State>(&junk, "demo", 3),
+        Err(IoError::CheckpointTruncated { .. })
+    ));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
