@@ -30,6 +30,11 @@
 //!   conductivity tensor; per-point history (`PointState`) lives in the caller's [`MpmState`].
 //!   Shipped: [`LinearThermoElastic`] (B-Eqs. 50–51), [`DruckerPrager`] (elasto-plastic,
 //!   plane strain) and [`StresslessConductor`] (no stiffness; heat only, benchmarks).
+//! * The batched form of the seam [`BatchConstitutive`]: one call per step hands every point's
+//!   input to the material (`&mut self`, so it may hold scratch), for models best stepped as
+//!   one batch (a DEM RVE per point, in `thm-coupling`); [`Mpm::step_batch`] runs the stages of
+//!   [`Mpm::step`] up to the gather and then [`Mpm::constitutive_update_batch`]. A per-point
+//!   model wrapped in [`PerPoint`] gives the same bits through either path (tested).
 //!
 //! ## The step (see [`stepper`])
 //!
@@ -126,8 +131,9 @@ pub use config::{MpmConfig, MpmParameters};
 pub use error::MpmError;
 pub use grid::{Grid, GridParameters};
 pub use material::{
-    Constitutive, DruckerPrager, DruckerPragerParameters, DruckerPragerState, LinearThermoElastic,
-    MaterialInput, MaterialResponse, StresslessConductor, ThermoElasticParameters,
+    BatchConstitutive, Constitutive, DruckerPrager, DruckerPragerParameters, DruckerPragerState,
+    LinearThermoElastic, MaterialInput, MaterialResponse, PerPoint, StresslessConductor,
+    ThermoElasticParameters,
 };
 pub use points::{MaterialPoints, PointProperties};
 pub use stepper::{GridFields, Mpm, MpmState, NodeSums, TimeStepLimits};

@@ -65,6 +65,90 @@ pub trait Constitutive: Sync {
     fn initial_conductivity(&self) -> Sym2;
 }
 
+/// A constitutive model whose points are advanced together, one call per step: the batched
+/// form of the seam, for models whose points are expensive and best stepped as one batch (a DEM
+/// RVE per point, stepped on a thread pool or, later, on other ranks). [`crate::Mpm::step_batch`]
+/// gathers every point first, then hands all inputs over in one call.
+///
+/// The model may hold scratch (`&mut self`); per-point history lives in the caller's
+/// [`crate::MpmState`]. Any per-point [`Constitutive`] model runs through this seam as
+/// [`PerPoint`], with the same bits as [`crate::Mpm::step`].
+pub trait BatchConstitutive: Sync {
+    /// Per-point history, owned by the caller's state.
+    type PointState: Clone + Send + Sync + std::fmt::Debug + Serialize + DeserializeOwned;
+    /// The model's error; the stepper's own errors convert into it.
+    type Error: From<MpmError> + std::fmt::Debug;
+
+    /// Advances every point by one step: `responses[p]` for `inputs[p]` and `states[p]` (all
+    /// three slices have one entry per point, in point order).
+    fn respond_batch(
+        &mut self,
+        states: &mut [Self::PointState],
+        inputs: &[MaterialInput],
+        responses: &mut [MaterialResponse],
+    ) -> Result<(), Self::Error>;
+
+    /// The modulus that sets the mechanical time-step limit B-Eq. 30 (Pa).
+    fn wave_modulus(&self, state: &Self::PointState) -> f64;
+}
+
+/// A per-point [`Constitutive`] model behind the batched seam: points are handed to it in
+/// chunks on the rayon pool, each chunk in point order; the error of the lowest point is
+/// returned.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PerPoint<M>(pub M);
+
+/// Points per work item of [`PerPoint::respond_batch`].
+const PER_POINT_CHUNK: usize = 512;
+
+impl<M: Constitutive> BatchConstitutive for PerPoint<M> {
+    type PointState = M::PointState;
+    type Error = MpmError;
+
+    fn respond_batch(
+        &mut self,
+        states: &mut [M::PointState],
+        inputs: &[MaterialInput],
+        responses: &mut [MaterialResponse],
+    ) -> Result<(), MpmError> {
+        use rayon::prelude::*;
+        if states.len() != inputs.len() || responses.len() != inputs.len() {
+            return Err(MpmError::MaterialStateCount {
+                states: states.len(),
+                points: inputs.len(),
+            });
+        }
+        let model = &self.0;
+        let err = states
+            .par_chunks_mut(PER_POINT_CHUNK)
+            .zip(inputs.par_chunks(PER_POINT_CHUNK))
+            .zip(responses.par_chunks_mut(PER_POINT_CHUNK))
+            .filter_map(|((s, i), r)| {
+                for ((s, i), r) in s.iter_mut().zip(i).zip(r.iter_mut()) {
+                    match model.respond(s, i) {
+                        Ok(x) => *r = x,
+                        Err(e) => return Some(e),
+                    }
+                }
+                None
+            })
+            .min_by_key(|e| match e {
+                MpmError::Material { point, .. }
+                | MpmError::InvalidPoint { index: point, .. }
+                | MpmError::NonFinite { index: point, .. } => *point,
+                _ => 0,
+            });
+        match err {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    fn wave_modulus(&self, state: &M::PointState) -> f64 {
+        self.0.wave_modulus(state)
+    }
+}
+
 /// Parameters of [`LinearThermoElastic`] (serde form).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -37,7 +37,7 @@ use crate::boundary::{RigidWall, SurfaceLoad};
 use crate::config::MpmConfig;
 use crate::error::MpmError;
 use crate::grid::Grid;
-use crate::material::{Constitutive, MaterialInput};
+use crate::material::{BatchConstitutive, Constitutive, MaterialInput, MaterialResponse};
 use crate::points::{Mat2, MaterialPoints, Sym2};
 use crate::shape::{PackedStencil, Stencil};
 use rayon::prelude::*;
@@ -200,7 +200,30 @@ pub struct Mpm {
     row_reactions: Vec<[f64; 2]>,
     /// Step counter of the state this stepper advanced last (`None` before the first step).
     last_step: Option<u64>,
+    /// Inputs of the batched constitutive update, one per point.
+    inputs: Vec<MaterialInput>,
+    /// Responses of the batched constitutive update, one per point.
+    responses: Vec<MaterialResponse>,
 }
+
+/// Placeholder entry of the batched inputs (overwritten before use).
+const EMPTY_INPUT: MaterialInput = MaterialInput {
+    point: 0,
+    velocity_gradient: [0.0; 4],
+    deformation_gradient: [1.0, 0.0, 0.0, 1.0],
+    temperature: 0.0,
+    temperature_rate: 0.0,
+    stress: [0.0; 3],
+    density: 0.0,
+    dt: 0.0,
+};
+
+/// Placeholder entry of the batched responses (overwritten before use).
+const EMPTY_RESPONSE: MaterialResponse = MaterialResponse {
+    stress: [0.0; 3],
+    heat_source: 0.0,
+    conductivity: [0.0; 3],
+};
 
 /// Mutable fields of one node row (grid update).
 struct NodeRow<'a> {
@@ -641,25 +664,20 @@ impl StableTest {
     /// True when the point clearly satisfies B-Eqs. 30–31: `Δt² M V < l_e² m` and
     /// `Δt b k̄ V < l_e² m c`, with a relative margin of 1e-9.
     #[inline]
-    fn point<M: Constitutive>(
-        &self,
-        material: &M,
-        ms: &M::PointState,
-        (m, v, c, k): (f64, f64, f64, Sym2),
-    ) -> bool {
-        let modulus = material.wave_modulus(ms);
+    fn point(&self, modulus: f64, (m, v, c, k): (f64, f64, f64, Sym2)) -> bool {
         let kbar = 0.5 * (k[0] + k[1]);
         let room = self.bound * m;
         (modulus <= 0.0 || modulus.is_nan() || self.mech * modulus * v <= room)
             && (kbar <= 0.0 || kbar.is_nan() || self.therm * kbar * v <= room * c)
     }
 
-    /// True when every point of `range` clearly satisfies both limits.
-    fn range<M: Constitutive>(
+    /// True when every point of `range` clearly satisfies both limits; `modulus(ms)` is the
+    /// wave modulus of a point's material state.
+    fn range<S, F: Fn(&S) -> f64>(
         &self,
         pts: &MaterialPoints,
-        ms: &[M::PointState],
-        material: &M,
+        ms: &[S],
+        modulus: F,
         range: std::ops::Range<usize>,
     ) -> bool {
         let r = range;
@@ -669,7 +687,7 @@ impl StableTest {
             .zip(&pts.specific_heat[r.clone()])
             .zip(&pts.conductivity[r.clone()])
             .zip(&ms[r])
-            .all(|((((m, v), c), k), ms)| self.point(material, ms, (*m, *v, *c, *k)))
+            .all(|((((m, v), c), k), ms)| self.point(modulus(ms), (*m, *v, *c, *k)))
     }
 }
 
@@ -743,6 +761,8 @@ impl Mpm {
             wall_reactions: vec![[0.0; 2]; walls],
             row_reactions: vec![[0.0; 2]; ny * walls.max(1)],
             last_step: None,
+            inputs: Vec::new(),
+            responses: Vec::new(),
             config,
         }
     }
@@ -776,14 +796,23 @@ impl Mpm {
         state: &MpmState<M::PointState>,
         material: &M,
     ) -> TimeStepLimits {
-        let pts = &state.points;
+        self.time_step_limits_with(&state.points, |p| material.wave_modulus(&state.material[p]))
+    }
+
+    /// Limits B-Eqs. 30–31 for points whose wave modulus is `wave_modulus(p)` (Pa) (any
+    /// material, e.g. a [`BatchConstitutive`] one).
+    pub fn time_step_limits_with<F: Fn(usize) -> f64 + Sync>(
+        &self,
+        pts: &MaterialPoints,
+        wave_modulus: F,
+    ) -> TimeStepLimits {
         let le = self.config.grid.cell_size();
         let b = self.config.params.thermal_time_step_factor;
         let (mech, th) = (0..pts.len())
             .into_par_iter()
             .map(|p| {
                 let rho = pts.mass[p] / pts.volume[p];
-                let modulus = material.wave_modulus(&state.material[p]);
+                let modulus = wave_modulus(p);
                 let mech = if modulus > 0.0 {
                     le / (modulus / rho).sqrt()
                 } else {
@@ -827,7 +856,7 @@ impl Mpm {
             test.range(
                 pts,
                 ms,
-                material,
+                |s| material.wave_modulus(s),
                 c * BIN_CHUNK..((c + 1) * BIN_CHUNK).min(pts.len()),
             )
         })
@@ -867,7 +896,11 @@ impl Mpm {
         material: &M,
         dt: f64,
     ) -> Result<(), MpmError> {
-        let lim = self.time_step_limits(state, material);
+        Self::check_limits(self.time_step_limits(state, material), dt)
+    }
+
+    /// Error when `dt` reaches either limit.
+    fn check_limits(lim: TimeStepLimits, dt: f64) -> Result<(), MpmError> {
         if dt >= lim.mechanical {
             return Err(MpmError::TimeStepTooLarge {
                 dt,
@@ -917,7 +950,9 @@ impl Mpm {
         check_dt(dt)?;
         let test = StableTest::new(&self.config, dt);
         let (pts, ms) = (&state.points, &state.material);
-        if !self.bin_points(pts, |r| test.range(pts, ms, material, r)) {
+        if !self.bin_points(pts, |r| {
+            test.range(pts, ms, |s| material.wave_modulus(s), r)
+        }) {
             self.check_time_step_exactly(state, material, dt)?;
         }
         self.scatter_sweeps(&state.points, state.step, Some((dt, state.time)))?;
@@ -925,6 +960,153 @@ impl Mpm {
         state.time += dt;
         state.step += 1;
         self.last_step = Some(state.step);
+        Ok(())
+    }
+
+    /// One explicit step with a [`BatchConstitutive`] material: the stages of [`Mpm::step`]
+    /// up to the gather, then [`Mpm::constitutive_update_batch`], which hands every point to
+    /// the material in one call. With [`crate::PerPoint`] it gives the same bits as
+    /// [`Mpm::step`] with the wrapped model (tested).
+    pub fn step_batch<M: BatchConstitutive>(
+        &mut self,
+        state: &mut MpmState<M::PointState>,
+        material: &mut M,
+        dt: f64,
+    ) -> Result<(), M::Error> {
+        if state.material.len() != state.points.len() {
+            return Err(MpmError::MaterialStateCount {
+                states: state.material.len(),
+                points: state.points.len(),
+            }
+            .into());
+        }
+        if self.last_step != Some(state.step) {
+            self.validate_state(state)?;
+        }
+        self.last_step = None;
+        check_dt(dt)?;
+        let test = StableTest::new(&self.config, dt);
+        let (pts, ms) = (&state.points, &state.material);
+        let model = &*material;
+        if !self.bin_points(pts, |r| test.range(pts, ms, |s| model.wave_modulus(s), r)) {
+            let lim = self.time_step_limits_with(pts, |p| model.wave_modulus(&ms[p]));
+            Self::check_limits(lim, dt)?;
+        }
+        self.scatter_sweeps(&state.points, state.step, Some((dt, state.time)))?;
+        self.grid_to_particle(&mut state.points, dt, state.step)?;
+        self.constitutive_update_batch(state, material, dt)?;
+        state.time += dt;
+        state.step += 1;
+        self.last_step = Some(state.step);
+        Ok(())
+    }
+
+    /// Stage: constitutive update through the batched seam. Per point (in parallel chunks)
+    /// `F ← (I + L Δt) F`, `V = V_0 det F`, `ε += sym(L) Δt` and the [`MaterialInput`]; then
+    /// one call of [`BatchConstitutive::respond_batch`] for all points; then stress, heat
+    /// source and conductivity are checked for finiteness and stored. A point whose `det F`
+    /// leaves `(0, ∞)` stops the step before the material is called (lowest point named).
+    pub fn constitutive_update_batch<M: BatchConstitutive>(
+        &mut self,
+        state: &mut MpmState<M::PointState>,
+        material: &mut M,
+        dt: f64,
+    ) -> Result<(), M::Error> {
+        let pts = &mut state.points;
+        let step = state.step;
+        let n = pts.len();
+        self.velocity_gradient.resize(n, [0.0; 4]);
+        self.temperature_rate.resize(n, 0.0);
+        self.inputs.resize(n, EMPTY_INPUT);
+        self.responses.resize(n, EMPTY_RESPONSE);
+        const C: usize = POINT_CHUNK;
+        let bad = (
+            (
+                pts.deformation_gradient.par_chunks_mut(C),
+                pts.volume.par_chunks_mut(C),
+                pts.strain.par_chunks_mut(C),
+                self.inputs.par_chunks_mut(C),
+            ),
+            (
+                self.velocity_gradient.par_chunks(C),
+                self.temperature_rate.par_chunks(C),
+                pts.remapped_temperature.par_chunks(C),
+                pts.stress.par_chunks(C),
+                pts.mass.par_chunks(C),
+                pts.initial_volume.par_chunks(C),
+            ),
+        )
+            .into_par_iter()
+            .with_max_len(2)
+            .enumerate()
+            .filter_map(|(c, ((f, vol, eps, inputs), (l, tdot, t, sig, m, v0)))| {
+                let rows = f
+                    .iter_mut()
+                    .zip(vol.iter_mut())
+                    .zip(eps.iter_mut())
+                    .zip(inputs.iter_mut())
+                    .zip(
+                        l.iter()
+                            .zip(tdot)
+                            .zip(t.iter().zip(sig).zip(m.iter().zip(v0))),
+                    );
+                for (j, ((((f, vol), eps), input), ((l, tdot), ((t, sig), (m, v0))))) in
+                    rows.enumerate()
+                {
+                    let i = c * C + j;
+                    if let Err(det) = advance_kinematics(f, vol, eps, l, *v0, dt) {
+                        return Some((i, det));
+                    }
+                    *input = MaterialInput {
+                        point: i,
+                        velocity_gradient: *l,
+                        deformation_gradient: *f,
+                        temperature: *t,
+                        temperature_rate: *tdot,
+                        stress: *sig,
+                        density: m / *vol,
+                        dt,
+                    };
+                }
+                None
+            })
+            .min_by_key(|(i, _)| *i);
+        if let Some((index, value)) = bad {
+            return Err(MpmError::InvalidPoint {
+                index,
+                field: "det F",
+                value,
+                allowed: "(0, inf)",
+            }
+            .into());
+        }
+        material.respond_batch(&mut state.material, &self.inputs, &mut self.responses)?;
+        let bad = self.responses.iter().position(|r| {
+            !(r.stress.iter().all(|s| s.is_finite())
+                && r.heat_source.is_finite()
+                && r.conductivity.iter().all(|c| c.is_finite()))
+        });
+        if let Some(index) = bad {
+            return Err(MpmError::NonFinite {
+                quantity: "stress, heat source or conductivity",
+                place: "material point",
+                index,
+                stage: "constitutive_update_batch",
+                step,
+            }
+            .into());
+        }
+        for (((sig, q), k), r) in pts
+            .stress
+            .iter_mut()
+            .zip(pts.heat_source.iter_mut())
+            .zip(pts.conductivity.iter_mut())
+            .zip(&self.responses)
+        {
+            *sig = r.stress;
+            *q = r.heat_source;
+            *k = r.conductivity;
+        }
         Ok(())
     }
 
@@ -1740,6 +1922,38 @@ struct RespondChunk<'a, S> {
     v0: &'a [f64],
 }
 
+/// The kinematic part of the constitutive update of one point: `F ← (I + L Δt) F`,
+/// `V = V_0 det F`, `ε += sym(L) Δt`. Errors with the new `det F` (nothing changed) when it
+/// would leave `(0, ∞)`.
+#[inline]
+fn advance_kinematics(
+    f: &mut Mat2,
+    vol: &mut f64,
+    eps: &mut Sym2,
+    l: &Mat2,
+    v0: f64,
+    dt: f64,
+) -> Result<(), f64> {
+    let fo = *f;
+    let a = [1.0 + l[0] * dt, l[1] * dt, l[2] * dt, 1.0 + l[3] * dt];
+    let fnew = [
+        a[0] * fo[0] + a[1] * fo[2],
+        a[0] * fo[1] + a[1] * fo[3],
+        a[2] * fo[0] + a[3] * fo[2],
+        a[2] * fo[1] + a[3] * fo[3],
+    ];
+    let det = fnew[0] * fnew[3] - fnew[1] * fnew[2];
+    if !(det > 0.0 && det.is_finite()) {
+        return Err(det);
+    }
+    *f = fnew;
+    *vol = v0 * det;
+    eps[0] += l[0] * dt;
+    eps[1] += l[3] * dt;
+    eps[2] += 0.5 * (l[1] + l[2]) * dt;
+    Ok(())
+}
+
 /// Constitutive update of one chunk of points, the first of which is point `first`; the
 /// chunk's first error.
 fn respond_chunk<M: Constitutive>(
@@ -1762,16 +1976,7 @@ fn respond_chunk<M: Constitutive>(
     for (j, (((((((f, vol), eps), sig), q), k), ms), ((l, tdot), ((t, m), v0)))) in rows.enumerate()
     {
         let i = first + j;
-        let fo = *f;
-        let a = [1.0 + l[0] * dt, l[1] * dt, l[2] * dt, 1.0 + l[3] * dt];
-        let fnew = [
-            a[0] * fo[0] + a[1] * fo[2],
-            a[0] * fo[1] + a[1] * fo[3],
-            a[2] * fo[0] + a[3] * fo[2],
-            a[2] * fo[1] + a[3] * fo[3],
-        ];
-        let det = fnew[0] * fnew[3] - fnew[1] * fnew[2];
-        if !(det > 0.0 && det.is_finite()) {
+        if let Err(det) = advance_kinematics(f, vol, eps, l, *v0, dt) {
             err.get_or_insert(MpmError::InvalidPoint {
                 index: i,
                 field: "det F",
@@ -1780,15 +1985,10 @@ fn respond_chunk<M: Constitutive>(
             });
             continue;
         }
-        *f = fnew;
-        *vol = v0 * det;
-        eps[0] += l[0] * dt;
-        eps[1] += l[3] * dt;
-        eps[2] += 0.5 * (l[1] + l[2]) * dt;
         let input = MaterialInput {
             point: i,
             velocity_gradient: *l,
-            deformation_gradient: fnew,
+            deformation_gradient: *f,
             temperature: *t,
             temperature_rate: *tdot,
             stress: *sig,
