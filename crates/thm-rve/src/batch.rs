@@ -55,27 +55,59 @@ impl RveBatch {
         states: &mut [RveState],
         loads: &[RveLoad],
     ) -> Result<Vec<RveResponse>, RveError> {
+        let mut responses = vec![RveResponse::default(); self.count];
+        self.respond_into(states, loads, &mut responses)
+            .map_err(|(_, e)| e)?;
+        Ok(responses)
+    }
+
+    /// [`RveBatch::respond`] into the caller's `responses` (one per RVE; no allocation), with
+    /// the index of the lowest-numbered failing RVE beside its error. The states may be any
+    /// per-RVE records that hold an [`RveState`] (e.g. a material point's RVE with its
+    /// diagnostics). Every RVE of a chunk is
+    /// stepped even after one of the chunk failed.
+    pub fn respond_into<S: AsMut<RveState> + Send>(
+        &mut self,
+        states: &mut [S],
+        loads: &[RveLoad],
+        responses: &mut [RveResponse],
+    ) -> Result<(), (usize, RveError)> {
         let n = self.count;
+        if responses.len() != n {
+            return Err((
+                0,
+                RveError::LengthMismatch {
+                    field: "responses",
+                    len: responses.len(),
+                    expected: n,
+                },
+            ));
+        }
         if states.len() != n {
-            return Err(RveError::LengthMismatch {
-                field: "states",
-                len: states.len(),
-                expected: n,
-            });
+            return Err((
+                0,
+                RveError::LengthMismatch {
+                    field: "states",
+                    len: states.len(),
+                    expected: n,
+                },
+            ));
         }
         if loads.len() != n {
-            return Err(RveError::LengthMismatch {
-                field: "loads",
-                len: loads.len(),
-                expected: n,
-            });
+            return Err((
+                0,
+                RveError::LengthMismatch {
+                    field: "loads",
+                    len: loads.len(),
+                    expected: n,
+                },
+            ));
         }
-        let mut responses = vec![RveResponse::default(); n];
         if n == 0 {
-            return Ok(responses);
+            return Ok(());
         }
         let chunk = n.div_ceil(self.steppers.len());
-        let errors: Vec<Option<RveError>> = self
+        let first_error = self
             .steppers
             .par_iter_mut()
             .zip(
@@ -85,22 +117,25 @@ impl RveBatch {
                     .zip(responses.par_chunks_mut(chunk)),
             )
             .with_min_len(1)
-            .map(|(stepper, ((states, loads), responses))| {
+            .enumerate()
+            .filter_map(|(c, (stepper, ((states, loads), responses)))| {
                 let mut first = None;
-                for ((state, load), response) in states.iter_mut().zip(loads).zip(responses) {
-                    match stepper.respond(state, load) {
+                for (j, ((state, load), response)) in
+                    states.iter_mut().zip(loads).zip(responses).enumerate()
+                {
+                    match stepper.respond(state.as_mut(), load) {
                         Ok(r) => *response = r,
                         Err(e) => {
-                            first.get_or_insert(e);
+                            first.get_or_insert((c * chunk + j, e));
                         }
                     }
                 }
                 first
             })
-            .collect();
-        match errors.into_iter().flatten().next() {
+            .min_by_key(|(i, _)| *i);
+        match first_error {
             Some(e) => Err(e),
-            None => Ok(responses),
+            None => Ok(()),
         }
     }
 }

@@ -92,10 +92,12 @@
 //!
 //! ## Numerics and determinism
 //!
-//! A step is a fixed sequence of stages: neighbour update (Verlet list on a periodic cell
-//! grid in reduced coordinates, rebuilt when fluctuating displacements, the cell deformation
-//! since the build and radius growth could use up the skin; disks are wrapped back into the
-//! cell only then), contact forces in list order, then integration. Contacts go through
+//! A step is a fixed sequence of stages: integration with the forces of the last evaluation,
+//! neighbour update (Verlet list on a periodic cell grid in reduced coordinates, rebuilt when
+//! fluctuating displacements, the cell deformation since the build and radius growth could use
+//! up the skin; disks are wrapped back into the cell only then), then contact forces in list
+//! order at the configuration the step ends in (so stress, fabric and stiffness measured after
+//! a step are those of the state's own configuration; see [`stepper`]). Contacts go through
 //! `thm-dem`'s law monomorphised for [`thm_dem::Vec2`] (2D arithmetic only); the disks are
 //! copied once per step into compact records, so a contact reads two records. Each RVE is
 //! stepped serially; a batch distributes chunks of RVEs (one scratch stepper per chunk) over

@@ -138,6 +138,12 @@ pub struct RveState {
     pub contact_moment: Mat2,
 }
 
+impl AsMut<RveState> for RveState {
+    fn as_mut(&mut self) -> &mut RveState {
+        self
+    }
+}
+
 impl RveState {
     /// Disks at rest from centres \[m\] and radii \[m\] in a cell; `density` \[kg/m³\] and the
     /// fictitious `thickness` \[m\] give masses `ρ π R² z_p`; all disks at `temperature` \[K\] with

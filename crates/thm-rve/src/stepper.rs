@@ -1,16 +1,26 @@
 //! The DEM step of an RVE: a fixed sequence of named stages over caller-owned state.
 //!
-//! 1. [`RveStepper::update_neighbours`]: Verlet check; when a disk moved, the cell deformed or
+//! 1. [`RveStepper::integrate`]: with the forces of the last evaluation, local damping,
+//!    leapfrog for the fluctuating velocity, then the centres move with `ẋ = v_f + L x` and the
+//!    cell with `Ḣ = L H` (B-Eqs. 42, 46), both by the same explicit step so that reduced
+//!    coordinates see only the fluctuation;
+//! 2. [`RveStepper::update_neighbours`]: Verlet check; when a disk moved, the cell deformed or
 //!    a radius grew enough to use up the skin, disks are wrapped back into the cell
 //!    (B-Eqs. 43–44), the periodic grid lists the near pairs and the contact histories are
 //!    carried over pair by pair;
-//! 2. [`RveStepper::compute_contact_forces`]: every listed pair, in list order, with the
+//! 3. [`RveStepper::compute_contact_forces`]: every listed pair, in list order, with the
 //!    periodic branch vector `b = x_b + H s − x_a` and the relative velocity
-//!    `v_f,b − v_f,a + L b` (B-Eq. 45), through `thm-dem`'s contact law (B-Eqs. 35–40); sums
-//!    disk forces, the contact part of B-Eq. 49 and the friction work of B-Eq. 32;
-//! 3. [`RveStepper::integrate`]: local damping, leapfrog for the fluctuating velocity, then the
-//!    centres move with `ẋ = v_f + L x` and the cell with `Ḣ = L H` (B-Eqs. 42, 46), both by
-//!    the same explicit step so that reduced coordinates see only the fluctuation.
+//!    `v_f,b − v_f,a + L b` (B-Eq. 45) of the motion just made, through `thm-dem`'s contact law
+//!    (B-Eqs. 35–40); sums disk forces, the contact part of B-Eq. 49 and the friction work of
+//!    B-Eq. 32.
+//!
+//! Forces are evaluated last, at the configuration the step ends in: the stress, fabric and
+//! stiffness measured after a step (B-Eqs. 34, 49, 58) belong to the state's own positions and
+//! cell, not to those one DEM step earlier, and the shear increment of each evaluation uses the
+//! `L` and `Δt` of the motion it follows. (Measured one step early, the stress of an RVE that
+//! drives a material point lags its deformation by `Δt/N`, a negative damping that makes the
+//! coupled explicit scheme unstable.) A state whose forces were never evaluated starts with
+//! zero forces, so its first step moves nothing but the affine field.
 //!
 //! [`RveStepper::respond`] wraps `substeps` steps with the temperature update (B-Eq. 37) and
 //! returns stress, heat source and conductivity (B-Eqs. 33, 34, 49).
@@ -103,9 +113,9 @@ impl RveStepper {
     /// One DEM step of `dt` under the velocity gradient `l`. Returns the friction heat of the
     /// step, `E_f` of B-Eq. 32 \[J\].
     pub fn step(&mut self, state: &mut RveState, l: &Mat2, dt: f64) -> Result<f64, RveError> {
+        self.integrate(state, l, dt)?;
         self.update_neighbours(state)?;
         let heat = self.compute_contact_forces(state, l, dt);
-        self.integrate(state, l, dt)?;
         state.step += 1;
         state.time += dt;
         state.friction_heat_total += heat;
