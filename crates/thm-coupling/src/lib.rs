@@ -52,11 +52,16 @@
 //! Units: SI throughout (m, kg, s, K, Pa, J, W). Valid where the composed crates are: laminar
 //! channel flow, pore fluids inside the EOS's range, Δt_D below the DEM's critical step.
 //!
-//! ## MPM×DEM (Zhao et al. 2022, Sect. 4, Algorithm 1)
+//! ## MPM×DEM (Zhao et al. 2022, Sect. 4, Algorithm 1): [`multiscale`]
 //!
-//! Each material point of `thm-mpm` owns an RVE of `thm-rve`: the point's velocity gradient
-//! and temperature drive the RVE, which returns stress, friction heat source and conductivity
-//! tensor through `thm-mpm`'s constitutive trait, implemented here for the RVE.
+//! Each material point of `thm-mpm` owns an RVE of `thm-rve` ([`multiscale::RvePoint`]): the
+//! point's velocity gradient and remapped temperature (B-Eq. 29) drive the RVE, which returns
+//! stress (B-Eq. 49, sign turned to tension positive), friction heat source (B-Eqs. 32–33) and
+//! conductivity tensor (B-Eq. 34) through `thm-mpm`'s batched constitutive seam, implemented
+//! here by [`multiscale::RveMaterial`]: all RVEs of a step are stepped as one batch. The DEM
+//! time rule (`N = ⌈Δt/(c √(s m_min/k_n))⌉` DEM steps per MPM step, density scaling `s`) and
+//! its quasi-static limits (inertial number ≤ 10⁻³, kinetic ≤ 1 % of elastic energy) are in
+//! the module docs, with the granular rod of B-Sect. 5.2.1 ([`multiscale::rod`]).
 //!
 //! ## The paper's bar cases ([`bar`])
 //!
@@ -72,8 +77,9 @@
 //!
 //! In place: the pore-scale step, implicit pressure and heat steps for long runs, the bar
 //! cases of A-Sects. 4, 5 and 6 case b (also as the `thm run` kind `pore_scale_bar`). Set up
-//! but not yet running to its end: A-Sect. 6 case a ([`bar::BarCase::ContractionFree`]). Not
-//! yet here: the MPM×DEM scheme.
+//! but not yet running to its end: A-Sect. 6 case a ([`bar::BarCase::ContractionFree`]). The
+//! MPM×DEM scheme with the granular rod of B-Sect. 5.2.1; not yet here: the other cases of
+//! B-Sects. 5.2.2–5.3 and their `thm run` kinds.
 //!
 //! ## Verification ([`verification::cases`])
 //!
@@ -85,6 +91,9 @@
 //!   (`StepReport::boundary_energy`) to 10⁻¹⁰, the time-step rule (halving Δt_C = 1 s moves
 //!   T_max by < 0.05 K), and the paper's 0.52 K, density range, speeds, Péclet numbers and
 //!   advection differences as reported rows.
+//! - `coupling/mpm_dem_rod` (and `_quick`): B-Sect. 5.2.1, temperature against B-Eq. 55,
+//!   stress after 0.4 s against B-Eq. 56 with K of B-Eq. 58, displacement against B-Eq. 57
+//!   (derived; the printed form has a slip), the quasi-static measures of the DEM time rule.
 //! - `coupling/bar_contraction_fixed`: A-Sect. 6 case b, phase masses to 10⁻¹², the energy
 //!   balance to 10⁻¹⁰, the time-step rule (halving Δt_C = 0.1 s moves T_max by < 0.1 K), and
 //!   the paper's 333.3 K and 73.0 kPa as reported rows.
@@ -92,6 +101,7 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod bar;
+pub mod multiscale;
 pub mod pore_scale;
 
 pub mod verification;

@@ -39,7 +39,7 @@ use crate::pore_scale::{
 
 /// All verification cases of `thm-coupling`.
 pub fn cases() -> Vec<Case> {
-    vec![
+    let mut cases = vec![
         Case {
             name: "coupling/pore_scale_closed_conservation",
             description: "closed adiabatic bonded packing, free skeleton with remeshes and fixed skeleton: liquid and gas mass and thermal energy constant (A-Eqs. 24-29, 39, 50)",
@@ -58,7 +58,9 @@ pub fn cases() -> Vec<Case> {
             quick: false,
             run: contraction_fixed_case,
         },
-    ]
+    ];
+    cases.extend(crate::multiscale::verification::cases());
+    cases
 }
 
 /// Paper A's fluids: Peng–Robinson water with the volume correction and air (A-Eqs. 16–29).

@@ -1,0 +1,281 @@
+//! The RVE-backed material of `thm-mpm`: every material point owns an RVE ([`RvePoint`], in
+//! the caller's `MpmState`), and [`RveMaterial`] steps them all as one batch through
+//! `thm-mpm`'s batched seam.
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use thm_mpm::points::Sym2;
+use thm_mpm::{BatchConstitutive, MaterialInput, MaterialPoints, MaterialResponse, MpmState};
+use thm_rve::{RveBatch, RveLoad, RveResponse, RveState, measure};
+
+use super::error::MultiscaleError;
+use super::params::{MultiscaleConfig, MultiscaleParams};
+use super::stages;
+
+/// The history of one material point: its RVE and what the last exchange measured on it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RvePoint {
+    /// The RVE (disk masses density-scaled by the DEM time rule).
+    pub rve: RveState,
+    /// MPM steps this RVE has taken.
+    pub steps: u64,
+    /// P-wave modulus for B-Eq. 30: the larger of `D_xxxx`, `D_yyyy` of B-Eq. 58 (Pa).
+    pub wave_modulus: f64,
+    /// Friction work of the last MPM step, `Σ E_f` of B-Eq. 32 over its DEM steps (J).
+    pub friction_work: f64,
+    /// RVE volume `det H · z_p` after the last step (m³).
+    pub rve_volume: f64,
+    /// Inertial number after the last step (see the module docs).
+    pub inertial_number: f64,
+    /// Fluctuating kinetic over contact elastic energy after the last step.
+    pub kinetic_ratio: f64,
+    /// DEM steps of the last MPM step.
+    pub substeps: u32,
+}
+
+impl AsMut<RveState> for RvePoint {
+    fn as_mut(&mut self) -> &mut RveState {
+        &mut self.rve
+    }
+}
+
+impl AsRef<RveState> for RvePoint {
+    fn as_ref(&self) -> &RveState {
+        &self.rve
+    }
+}
+
+/// An RVE per material point, stepped as one batch (`thm_rve::RveBatch`, rayon; nothing is
+/// reduced across RVEs, so any number of threads gives the same bits). Holds the validated
+/// parameters, the template packing and scratch only.
+#[derive(Debug, Clone)]
+pub struct RveMaterial {
+    config: MultiscaleConfig,
+    template: RvePoint,
+    batch: RveBatch,
+    loads: Vec<RveLoad>,
+    rve_responses: Vec<RveResponse>,
+    totals: Vec<f64>,
+}
+
+/// Relative tolerance of the packing check (disk mass against `ρ π R₀² z_p`).
+const PACKING_TOLERANCE: f64 = 1e-9;
+
+impl RveMaterial {
+    /// A material whose fresh points carry copies of `packing`, a packing made with the
+    /// physical density and thickness of `params.rve` whose contacts have been evaluated
+    /// (consolidated, or stepped once). The density scaling of the DEM time rule is applied
+    /// here. Errors: a parameter out of range (named), a packing whose disk masses do not
+    /// match `ρ π R₀² z_p` of the parameters.
+    pub fn new(params: &MultiscaleParams, packing: RveState) -> Result<Self, MultiscaleError> {
+        let config = params.validate()?;
+        let p = config.rve().params();
+        if packing.is_empty() {
+            return Err(MultiscaleError::PackingMismatch {
+                field: "disk count",
+                value: 0.0,
+                expected: 1.0,
+            });
+        }
+        for (m, r) in packing
+            .disks
+            .mass
+            .iter()
+            .zip(&packing.disks.reference_radius)
+        {
+            let expected = p.density * std::f64::consts::PI * r * r * p.thickness;
+            let close = (m - expected).abs() <= PACKING_TOLERANCE * expected;
+            if !close {
+                return Err(MultiscaleError::PackingMismatch {
+                    field: "disk mass (density x pi R0^2 x thickness)",
+                    value: *m,
+                    expected,
+                });
+            }
+        }
+        let mut rve = packing;
+        stages::scale_density(&mut rve, params.dem_time.density_scaling);
+        let [dx, dy] = stages::axial_moduli(&rve, p);
+        let template = RvePoint {
+            rve_volume: rve.volume(p.thickness),
+            rve,
+            steps: 0,
+            wave_modulus: dx.max(dy),
+            friction_work: 0.0,
+            inertial_number: 0.0,
+            kinetic_ratio: 0.0,
+            substeps: 0,
+        };
+        Ok(Self {
+            batch: RveBatch::new(*config.rve(), 0),
+            config,
+            template,
+            loads: Vec::new(),
+            rve_responses: Vec::new(),
+            totals: Vec::new(),
+        })
+    }
+
+    /// The validated configuration.
+    pub fn config(&self) -> &MultiscaleConfig {
+        &self.config
+    }
+
+    /// A fresh point's history (a copy of the template).
+    pub fn initial_point(&self) -> RvePoint {
+        self.template.clone()
+    }
+
+    /// The template's response as a material point sees it (stress tension positive, heat
+    /// source 0, conductivity), for the initial state of the points.
+    pub fn initial_response(&self) -> MaterialResponse {
+        let p = self.config.rve().params();
+        let r = RveResponse {
+            stress: measure::stress(&self.template.rve, p.thickness),
+            heat_source: 0.0,
+            conductivity: measure::conductivity(&self.template.rve, p),
+        };
+        stages::mpm_response(&r)
+    }
+
+    /// An MPM state of `points` at time 0, each point with a fresh RVE and the RVE's stress
+    /// and conductivity.
+    pub fn state(&self, mut points: MaterialPoints) -> MpmState<RvePoint> {
+        let r = self.initial_response();
+        points.stress.fill(r.stress);
+        points.conductivity.fill(r.conductivity);
+        points.heat_source.fill(0.0);
+        let n = points.len();
+        MpmState {
+            points,
+            material: vec![self.initial_point(); n],
+            time: 0.0,
+            step: 0,
+        }
+    }
+
+    /// The conductivity of the template `[kxx, kyy, kxy]` (W/(m K)).
+    pub fn initial_conductivity(&self) -> Sym2 {
+        self.initial_response().conductivity
+    }
+
+    /// The stage sequence of one exchange for all points (see [`super::stages`]).
+    fn exchange(
+        &mut self,
+        states: &mut [RvePoint],
+        inputs: &[MaterialInput],
+        responses: &mut [MaterialResponse],
+    ) -> Result<(), MultiscaleError> {
+        let n = inputs.len();
+        if states.len() != n || responses.len() != n {
+            return Err(thm_mpm::MpmError::MaterialStateCount {
+                states: states.len(),
+                points: n,
+            }
+            .into());
+        }
+        let params = *self.config.params();
+        let p = self.config.rve().params();
+        if self.batch.len() != n {
+            self.batch = RveBatch::new(*self.config.rve(), n);
+        }
+        // Lines 12, 15: deformation and temperature to each RVE.
+        stages::rve_loads(
+            inputs,
+            states,
+            p,
+            params.kelvin_offset,
+            params.dem_time.step_fraction,
+            &mut self.loads,
+        );
+        self.rve_responses.resize(n, RveResponse::default());
+        // Friction work of this step = change of the RVE's running total.
+        self.totals.clear();
+        self.totals
+            .extend(states.iter().map(|s| s.rve.friction_heat_total));
+        // Line 16: every RVE's DEM steps, as one batch.
+        if let Err((point, source)) =
+            self.batch
+                .respond_into(states, &self.loads, &mut self.rve_responses)
+        {
+            let s = states.get(point).map(|s| s.rve.cell.strain());
+            return Err(MultiscaleError::Rve {
+                point,
+                step: states.get(point).map_or(0, |s| s.steps),
+                volumetric_strain: s.map_or(f64::NAN, |s| s.volumetric),
+                deviatoric_strain: s.map_or(f64::NAN, |s| s.deviatoric),
+                source,
+            });
+        }
+        // Lines 18–19: stress, heat source, conductivity; the time-step modulus and the
+        // quasi-static measures.
+        let scaling = params.dem_time.density_scaling;
+        states
+            .par_iter_mut()
+            .zip(responses.par_iter_mut())
+            .zip(inputs.par_iter().zip(&self.rve_responses).zip(&self.loads))
+            .zip(self.totals.par_iter())
+            .for_each(|(((point, out), ((input, r), load)), before)| {
+                *out = stages::mpm_response(r);
+                let [dx, dy] = stages::axial_moduli(&point.rve, p);
+                point.wave_modulus = dx.max(dy);
+                point.friction_work = point.rve.friction_heat_total - before;
+                point.rve_volume = point.rve.volume(p.thickness);
+                let (i, k) =
+                    stages::quasi_static_measures(&point.rve, p, scaling, input, &r.stress);
+                point.inertial_number = i;
+                point.kinetic_ratio = k;
+                point.substeps = load.substeps;
+                point.steps += 1;
+            });
+        if let Some(limits) = params.quasi_static {
+            for (i, s) in states.iter().enumerate() {
+                let checks = [
+                    (
+                        "inertial number",
+                        s.inertial_number,
+                        limits.max_inertial_number,
+                    ),
+                    (
+                        "kinetic/elastic energy ratio",
+                        s.kinetic_ratio,
+                        limits.max_kinetic_ratio,
+                    ),
+                ];
+                for (quantity, value, limit) in checks {
+                    // NaN fails the check too.
+                    let within = value <= limit;
+                    if !within {
+                        return Err(MultiscaleError::NotQuasiStatic {
+                            point: i,
+                            step: s.steps,
+                            quantity,
+                            value,
+                            limit,
+                        });
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl BatchConstitutive for RveMaterial {
+    type PointState = RvePoint;
+    type Error = MultiscaleError;
+
+    fn respond_batch(
+        &mut self,
+        states: &mut [RvePoint],
+        inputs: &[MaterialInput],
+        responses: &mut [MaterialResponse],
+    ) -> Result<(), MultiscaleError> {
+        self.exchange(states, inputs, responses)
+    }
+
+    fn wave_modulus(&self, state: &RvePoint) -> f64 {
+        state.wave_modulus
+    }
+}

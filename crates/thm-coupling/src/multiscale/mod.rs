@@ -1,0 +1,99 @@
+//! # MPM×DEM thermo-mechanics (Zhao et al. 2022, Sect. 4, B-Algorithm 1)
+//!
+//! Every material point of `thm-mpm` owns a DEM RVE of `thm-rve` ([`RvePoint`], in the
+//! caller's `MpmState`); [`RveMaterial`] implements `thm-mpm`'s batched constitutive seam
+//! (`thm_mpm::BatchConstitutive`) and steps all RVEs of a step as one batch
+//! (`thm_rve::RveBatch`: chunks of RVEs on the rayon pool, nothing reduced across them, so 1
+//! and 2 threads give the same bits).
+//!
+//! ## One MPM step (`thm_mpm::Mpm::step_batch`)
+//!
+//! Mapping, nodal forces and heat loads, grid update and the gather run in `thm-mpm`
+//! (B-Eqs. 7–29). Then, for all points at once, the exchange of B-Algorithm 1, lines 11–19,
+//! as the named stages of [`stages`]:
+//!
+//! 1. the point's velocity gradient `L` and remapped temperature `T_p` (B-Eq. 29, the smooth
+//!    one the paper hands to the RVEs, Sect. 2.3) become the RVE's load: `L` held over `N`
+//!    DEM steps of `Δt/N` (B-Eqs. 41–46), disk radii from `T_p + T_offset` (B-Eq. 37);
+//! 2. the DEM steps of every RVE, as one batch;
+//! 3. back to the point: stress `σ = −sym(σ_RVE)` (B-Eq. 49 is compression positive,
+//!    `thm-mpm` is tension positive), heat source `Q = Σ E_f/(V N Δt_D)` (B-Eqs. 32–33, W/m³)
+//!    and conductivity `sym(k)` (B-Eq. 34, W/(m K));
+//! 4. per RVE, the P-wave modulus `max(D_xxxx, D_yyyy)` of B-Eq. 58 for the time-step limit
+//!    B-Eq. 30, the friction work of the step, the inertial number and the kinetic/elastic
+//!    energy ratio; with [`QuasiStaticLimits`] set, an RVE beyond them stops the run naming
+//!    the point and the step.
+//!
+//! The next step's nodal forces and heat loads (B-Eqs. 17–18) use these stress, heat source
+//! and conductivity, so the exchanges follow B-Algorithm 1's order (deformation and
+//! temperature → DEM → stress, heat source, conductivity → nodal force and heat load →
+//! update of points). `thm-mpm` updates stresses last (USL): the RVE sees the velocity
+//! gradient of the updated grid velocities of step n, where B-Algorithm 1 uses the grid
+//! velocities mapped from the points at the start of step n + 1.
+//!
+//! ## The DEM time rule
+//!
+//! Each MPM step `Δt` runs, in each RVE, `N = ⌈Δt / (c √(s m_min / k_n))⌉` DEM steps of
+//! `Δt/N` ([`DemTimeRule`]): `c = 0.2` (the fraction `thm-rve` consolidates with; the
+//! critical step of a disk between springs is `≈ 0.7 √(m/k_n)`) and a density scaling
+//! `s ≥ 1` of the disks' masses and inertias. So the DEM is stable for every `Δt`, and `s`
+//! trades DEM steps for inertia: `N ∝ s^{−1/2}`. The RVE is quasi-static when its inertial
+//! number `I = γ̇ d̄ √(s ρ_s / p) ≤ 10⁻³` (`γ̇` the deviatoric rate of `sym L`, the rate of
+//! `ε_q` of B-Eq. 48; `d̄` the mean diameter; `p` the RVE's mean pressure) and its fluctuating
+//! kinetic energy is at most 1 % of the elastic energy of its contacts (this one also covers
+//! volumetric and thermal loading, which `I` does not see) ([`QuasiStaticLimits`], checked
+//! after every step when set). `I` grows as `√s`: the scaling is admissible as long as both
+//! stay below the limits.
+//! Evidence (test `dem_time_rule_does_not_change_the_response`): a consolidated 100-disk RVE
+//! driven by the same compression–shear–heating history (0.02 s in MPM steps of 10⁻⁴ s,
+//! μ = 0.5, no damping) with `s = 1, 4, 16` (N = 80, 40, 20) stays within the limits; relative
+//! to the largest stress change of the `s = 1` run its stresses agree within 2.5 % over the
+//! whole history (measured 2.1 % and 1.8 %: the first steps, where L is switched on at once
+//! and the RVE's own response time, ∝ √s, shows), within 1.5 % from 2 ms on (1.1 %, 1.4 %)
+//! and within 0.2 % at the end (0.05 %, 0.16 %). The same history 100 times faster is stopped
+//! by the check. On the rod's square lattice, which deforms affinely, `s = 20` (N = 1) and
+//! `s = 1` (N = 5: 10⁻⁴ s is 4.002 times 0.2 √(m/k_n)) pass the same rows (verification).
+//!
+//! ## Choices where the paper is silent or ambiguous
+//!
+//! 1. **Temperatures.** The RVE works in kelvin (B-Eq. 37 from its reference temperature);
+//!    [`MultiscaleParams::kelvin_offset`] maps the MPM's temperature to it (273.15 for °C).
+//! 2. **Stress and conductivity symmetry.** B-Eq. 49's contact part is not exactly symmetric
+//!    out of equilibrium; the point takes its symmetric part, as it does of B-Eq. 34.
+//! 3. **Time-step modulus.** B-Eq. 30's `E` is read as the RVE's affine P-wave modulus
+//!    `max(D_xxxx, D_yyyy)` (B-Eq. 58), an upper bound of the packing's stiffness.
+//! 4. **RVE volume vs point volume.** An RVE's heat source is per RVE volume (B-Eq. 33) and
+//!    applied to the point's volume, so a point receives `Σ E_f · V_p / V_RVE` per step
+//!    (tested to round-off against the friction work summed over the RVEs).
+//!
+//! ## The granular rod (B-Sect. 5.2.1, [`rod`])
+//!
+//! 50 points on a 1 m rod, each with a 20 × 20 square packing of r = 5 mm disks at 100 kPa,
+//! B-Table 1's parameters, Δt = 10⁻⁴ s, 0 → 100 °C at `x = L`. Choices: the packing is built
+//! at its consolidated state (overlap `δ = σ₀ z_p 2r/(k_n + σ₀ z_p)`), not by the servo; α of
+//! B-Eq. 34 is set so that the packing conducts B-Table 1's k = 0.1 W/(m K) (the paper gives k,
+//! not α); the lateral nodes are held (`v_y = 0`) instead of a 100 kPa traction, since the
+//! square packing has `D_xxyy = 0` (ν = 0): σ_x and u_x do not depend on the lateral
+//! condition, and uGIMP's virtual-layer traction on a single row of points would split between
+//! the held bottom and the top nodes; grid damping α_g = 0.01 (B-Eq. 26) so that the stress
+//! wave of the sudden heating decays within about 10 ms, as B-Fig. 9's wave "relaxes with
+//! time" (undamped, it rings at about ±20 kPa around B-Eq. 56 for the whole run; the damping
+//! force on the slow thermal motion, `ρ α_g v/Δt`, is below 300 Pa/m), α_PIC = 0. The quasi-static solutions
+//! B-Eqs. 55–57 are read with `T₁` the hot-end temperature (the set-up text's `T₁ = T₀`
+//! would make them vanish), and B-Eq. 57's printed `cos(nπx/x)` is `cos(nπx/L)` (derived from
+//! `u = β∫₀ˣ T − (x/L) β∫₀ᴸ T`). The lattice expands by `β · 2r/a` (a = 2r − δ, 0.75 % more
+//! than β), which the analytical forms with β do not see.
+//!
+//! Units: SI; the MPM side of the rod in °C.
+
+pub mod error;
+pub mod material;
+pub mod params;
+pub mod rod;
+pub mod stages;
+pub mod verification;
+
+pub use error::MultiscaleError;
+pub use material::{RveMaterial, RvePoint};
+pub use params::{DemTimeRule, MultiscaleConfig, MultiscaleParams, QuasiStaticLimits};
+pub use rod::{GranularRod, RodModel};
