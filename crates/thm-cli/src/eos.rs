@@ -54,14 +54,44 @@ impl From<ModelChoice> for Model {
     }
 }
 
+/// Which table a CSV run computes (the subcommand).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Table {
+    /// `fluid,T,rho` → `P`.
+    Pressure,
+    /// `fluid,T,P,branch` → `rho`.
+    Density,
+    /// `T,V,m_liquid,m_gas` → `alpha,P,rho_liquid,rho_gas`.
+    Closure,
+}
+
+/// Reads CSV `input` and writes the computed table to `out`, as the subcommand does: every
+/// input gives rows or a [`CsvError`] naming line, row and column, never a panic.
+pub fn process_csv<R: BufRead, W: Write>(
+    table: Table,
+    model: Model,
+    input: R,
+    out: &mut W,
+) -> Result<(), CsvError> {
+    match table {
+        Table::Pressure => pressure(input, out, model),
+        Table::Density => density(input, out, model),
+        Table::Closure => closure(input, out, model),
+    }
+}
+
 /// Where in the input an error occurred and what it was.
 #[derive(Debug)]
-enum CsvError {
+pub enum CsvError {
     /// A problem with one row (or the header, row 0).
     Row {
+        /// Line of the input (from 1).
         line: usize,
+        /// Data row (from 1; 0 is the header).
         row: usize,
+        /// The column at fault.
         column: String,
+        /// What is wrong and what is allowed.
         message: String,
     },
     /// Reading standard input or writing standard output failed.
@@ -69,20 +99,26 @@ enum CsvError {
 }
 
 impl fmt::Display for CsvError {
+    /// Quoted input (a field, a header) is cut to a short excerpt: a row can be megabytes.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use crate::run::error::shorten;
         match self {
             CsvError::Row {
                 line,
                 row: 0,
                 column,
                 message,
-            } => write!(f, "line {line} (header), column `{column}`: {message}"),
+            } => f.write_str(&shorten(&format!(
+                "line {line} (header), column `{column}`: {message}"
+            ))),
             CsvError::Row {
                 line,
                 row,
                 column,
                 message,
-            } => write!(f, "line {line} (row {row}), column `{column}`: {message}"),
+            } => f.write_str(&shorten(&format!(
+                "line {line} (row {row}), column `{column}`: {message}"
+            ))),
             CsvError::Io(e) => write!(f, "i/o error: {e}"),
         }
     }
@@ -99,11 +135,12 @@ pub fn run(command: EosCommand) -> ExitCode {
     let stdin = io::stdin();
     let stdout = io::stdout();
     let mut out = BufWriter::new(stdout.lock());
-    let (name, result) = match command {
-        EosCommand::Pressure(m) => ("pressure", pressure(stdin.lock(), &mut out, m.model.into())),
-        EosCommand::Density(m) => ("density", density(stdin.lock(), &mut out, m.model.into())),
-        EosCommand::Closure(m) => ("closure", closure(stdin.lock(), &mut out, m.model.into())),
+    let (name, table, model) = match command {
+        EosCommand::Pressure(m) => ("pressure", Table::Pressure, m.model),
+        EosCommand::Density(m) => ("density", Table::Density, m.model),
+        EosCommand::Closure(m) => ("closure", Table::Closure, m.model),
     };
+    let result = process_csv(table, model.into(), stdin.lock(), &mut out);
     let flushed = out.flush();
     match result.and(flushed.map_err(CsvError::from)) {
         Ok(()) => ExitCode::SUCCESS,

@@ -2,10 +2,7 @@
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
-
-mod calibrate;
-mod eos;
-mod run;
+use thm_cli::{calibrate, eos, run};
 
 /// Coupled thermo-hydro-mechanical simulation of granular and porous materials.
 #[derive(Debug, Parser)]

@@ -100,9 +100,41 @@ pub fn run(args: &RunArgs) -> ExitCode {
         }
         Err(e) => {
             eprintln!("error: {e}");
+            // A run that stopped part-way (a full disk, an unstable step) keeps its last
+            // complete checkpoint: say which one and how to continue from it.
+            let stopped = matches!(
+                e,
+                RunError::Io(_)
+                    | RunError::OutputFolder { .. }
+                    | RunError::Physics { .. }
+                    | RunError::Unstable { .. }
+            );
+            if stopped && let Some(ckpt) = last_complete_checkpoint(&out) {
+                eprintln!(
+                    "the last complete checkpoint is {}; once the cause is fixed, continue with: thm run {} --out {} --resume {}",
+                    ckpt.display(),
+                    args.file.display(),
+                    out.display(),
+                    ckpt.display()
+                );
+            }
             ExitCode::FAILURE
         }
     }
+}
+
+/// The newest checkpoint in `out` that is complete and intact (checked, not only listed).
+pub fn last_complete_checkpoint(out: &Path) -> Option<PathBuf> {
+    let mut found: Vec<PathBuf> = std::fs::read_dir(out.join("checkpoints"))
+        .ok()?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "ckpt"))
+        .collect();
+    found.sort();
+    found
+        .into_iter()
+        .rev()
+        .find(|p| thm_io::checkpoint_info(p).is_ok())
 }
 
 #[cfg(test)]

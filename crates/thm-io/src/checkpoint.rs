@@ -287,7 +287,7 @@ pub fn checkpoint_from_bytes<T: DeserializeOwned>(
             kind: info.kind,
             found: info.state_version,
             expected: state_version,
-            writer: info.writer,
+            writer: excerpt(info.writer.as_bytes()),
         });
     }
     let state_error = |message: String| IoError::CheckpointState {
@@ -363,7 +363,7 @@ fn version_error(path: &Path, found: u32, writer: Option<String>) -> IoError {
         path: path.to_path_buf(),
         found,
         expected: CHECKPOINT_FORMAT_VERSION,
-        writer: writer.unwrap_or_else(|| "an earlier version".into()),
+        writer: writer.map_or_else(|| "an earlier version".into(), |w| excerpt(w.as_bytes())),
     }
 }
 

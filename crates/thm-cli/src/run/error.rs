@@ -13,13 +13,50 @@ pub struct ConfigError {
 }
 
 impl ConfigError {
-    /// An error at `key`.
+    /// An error at `key`. Quoted input in the key or message (between backticks or double
+    /// quotes) is cut to a short excerpt, so a huge value is never echoed whole.
     pub fn new(key: impl Into<String>, message: impl Into<String>) -> Self {
         Self {
-            key: key.into(),
-            message: message.into(),
+            key: shorten(&key.into()),
+            message: shorten(&message.into()),
         }
     }
+}
+
+/// Longest quoted excerpt of user input kept in a message \[characters\].
+pub const MAX_QUOTE: usize = 48;
+
+/// Longest message kept whole \[characters\].
+pub const MAX_MESSAGE: usize = 400;
+
+/// Cuts every quoted span (`` `…` `` or `"…"`) longer than [`MAX_QUOTE`] characters, and the
+/// whole text beyond [`MAX_MESSAGE`] characters, marking each cut with `…`.
+pub fn shorten(text: &str) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = String::with_capacity(text.len().min(4 * MAX_MESSAGE));
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        out.push(c);
+        i += 1;
+        if (c == '`' || c == '"')
+            && let Some(len) = chars[i..].iter().position(|&d| d == c)
+        {
+            if len > MAX_QUOTE {
+                out.extend(&chars[i..i + MAX_QUOTE]);
+                out.push('…');
+            } else {
+                out.extend(&chars[i..i + len]);
+            }
+            out.push(c);
+            i += len + 1;
+        }
+    }
+    if out.chars().count() > MAX_MESSAGE {
+        out = out.chars().take(MAX_MESSAGE).collect();
+        out.push('…');
+    }
+    out
 }
 
 /// Everything that stops a run.
@@ -48,6 +85,14 @@ pub enum RunError {
         path: PathBuf,
         /// The key path and what is wrong.
         error: ConfigError,
+    },
+    /// The scenario file is a checkpoint (a common slip: `thm run CHECKPOINT`).
+    #[error(
+        "{path}: this is a thm checkpoint, not a scenario file; continue its run with: thm run SCENARIO.toml --out FOLDER --resume {path}"
+    )]
+    CheckpointGivenAsScenario {
+        /// The file.
+        path: PathBuf,
     },
     /// The output folder cannot be created or written.
     #[error("output folder {path} cannot be written: {source}")]

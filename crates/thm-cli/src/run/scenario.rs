@@ -176,6 +176,62 @@ fn resolved_toml<P: Serialize>(
     Ok((toml::to_string(&table).map_err(ser)?, params_text))
 }
 
+/// The first key whose value differs between the resolved parameters of a checkpoint and of
+/// the scenario file, in words (values cut to a short excerpt).
+fn params_difference(saved: &str, now: &str) -> String {
+    fn walk(prefix: &str, a: &toml::Table, b: &toml::Table) -> Option<String> {
+        let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+        keys.sort();
+        keys.dedup();
+        for k in keys {
+            let key = if prefix.is_empty() {
+                k.clone()
+            } else {
+                format!("{prefix}.{k}")
+            };
+            match (a.get(k), b.get(k)) {
+                (Some(toml::Value::Table(x)), Some(toml::Value::Table(y))) => {
+                    if let Some(d) = walk(&key, x, y) {
+                        return Some(d);
+                    }
+                }
+                (x, y) if x != y => {
+                    let show = |v: Option<&toml::Value>| {
+                        v.map_or_else(|| "absent".to_string(), |v| format!("`{v}`"))
+                    };
+                    return Some(format!("{key} was {}, now {}", show(x), show(y)));
+                }
+                _ => {}
+            }
+        }
+        None
+    }
+    let parse = |t: &str| t.parse::<toml::Table>().ok();
+    let found = match (parse(saved), parse(now)) {
+        (Some(a), Some(b)) => walk("", &a, &b),
+        _ => None,
+    };
+    super::error::shorten(&found.unwrap_or_else(|| "the parameters differ".into()))
+}
+
+/// Reads and validates the kind's parameters and the common sections and builds the stepper
+/// and the initial state: everything a run checks before it touches the disk.
+fn build<S: Scenario>(
+    doc: &ScenarioDocument,
+) -> Result<(S::Params, TimeControl, S, S::State), ConfigError> {
+    let params: S::Params = from_toml(toml::Value::Table(doc.rest.clone()), "")?;
+    let tc = doc.common.time.validate()?;
+    doc.common.output.validate()?;
+    let (scenario, state) = S::init(&params, &tc)?;
+    Ok((params, tc, scenario, state))
+}
+
+/// Checks a parsed document for kind `S` as a run does before writing anything (see
+/// [`super::kinds::validate`]).
+pub fn validate<S: Scenario>(doc: &ScenarioDocument) -> Result<(), ConfigError> {
+    build::<S>(doc).map(|_| ())
+}
+
 /// Runs scenario kind `S` from a parsed document.
 pub fn drive<S: Scenario>(
     doc: ScenarioDocument,
@@ -186,10 +242,7 @@ pub fn drive<S: Scenario>(
         path: file.to_path_buf(),
         error,
     };
-    let params: S::Params = from_toml(toml::Value::Table(doc.rest.clone()), "").map_err(config)?;
-    let tc = doc.common.time.validate().map_err(config)?;
-    doc.common.output.validate().map_err(config)?;
-    let (mut scenario, mut state) = S::init(&params, &tc).map_err(config)?;
+    let (params, tc, mut scenario, mut state) = build::<S>(&doc).map_err(config)?;
     let (resolved, params_text) = resolved_toml(&doc, &params)?;
     let out = opts.out.as_path();
     prepare_output(out, opts.resume.is_some())?;
@@ -204,7 +257,7 @@ pub fn drive<S: Scenario>(
             detail,
         };
         if saved.params != params_text {
-            return Err(mismatch("the parameters differ".into()));
+            return Err(mismatch(params_difference(&saved.params, &params_text)));
         }
         if saved.dt.to_bits() != tc.dt.to_bits() {
             return Err(mismatch(format!(

@@ -9,20 +9,52 @@ use std::path::Path;
 
 use super::config::ScenarioDocument;
 use super::error::{ConfigError, RunError};
-use super::scenario::{DriveOptions, Outcome, Scenario, drive};
+use super::scenario::{self, DriveOptions, Outcome, Scenario, drive};
+
+/// The `kind` tags.
+const KINDS: [&str; 4] = [
+    lumped_cooling::LumpedCooling::KIND,
+    mpm_semi_infinite_bar::SemiInfiniteBar::KIND,
+    dem_uniaxial_tension_bar::DemTensionBar::KIND,
+    pore_scale_bar::PoreScaleBar::KIND,
+];
 
 /// The `kind` tags, for error messages.
 pub fn names() -> String {
-    [
-        lumped_cooling::LumpedCooling::KIND,
-        mpm_semi_infinite_bar::SemiInfiniteBar::KIND,
-        dem_uniaxial_tension_bar::DemTensionBar::KIND,
-        pore_scale_bar::PoreScaleBar::KIND,
-    ]
-    .iter()
-    .map(|k| format!("`{k}`"))
-    .collect::<Vec<_>>()
-    .join(", ")
+    KINDS
+        .iter()
+        .map(|k| format!("`{k}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Whether `kind` names a scenario kind.
+pub fn is_known(kind: &str) -> bool {
+    KINDS.contains(&kind)
+}
+
+/// Checks the document as its kind's run does before writing anything: parameters, time and
+/// output sections, and building the initial state. Every document gives `Ok` or an error
+/// naming the key path, never a panic.
+pub fn validate(doc: &ScenarioDocument) -> Result<(), ConfigError> {
+    match doc.common.kind.as_str() {
+        lumped_cooling::LumpedCooling::KIND => {
+            scenario::validate::<lumped_cooling::LumpedCooling>(doc)
+        }
+        mpm_semi_infinite_bar::SemiInfiniteBar::KIND => {
+            scenario::validate::<mpm_semi_infinite_bar::SemiInfiniteBar>(doc)
+        }
+        dem_uniaxial_tension_bar::DemTensionBar::KIND => {
+            scenario::validate::<dem_uniaxial_tension_bar::DemTensionBar>(doc)
+        }
+        pore_scale_bar::PoreScaleBar::KIND => {
+            scenario::validate::<pore_scale_bar::PoreScaleBar>(doc)
+        }
+        other => Err(ConfigError::new(
+            "kind",
+            format!("unknown scenario kind `{other}`; one of {}", names()),
+        )),
+    }
 }
 
 /// Runs the document with the driver of its kind.
