@@ -1,0 +1,3 @@
+//! The checking bodies of the fuzz targets (see `checks`).
+
+pub mod checks;
