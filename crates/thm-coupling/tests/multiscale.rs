@@ -394,3 +394,39 @@ fn degenerate_rve_names_point_step_and_strain() {
         other => panic!("{other}"),
     }
 }
+
+/// The orthotropic slab product with equal diffusivities is B-Eq. 59 (as recomputed in
+/// `thm-mpm`): `T₁ − ΔT θ(x) θ(y)`.
+#[test]
+fn slab_product_is_b_eq_59() {
+    use thm_coupling::multiscale::square::slab_factor;
+    for t in [0.01, 0.1, 0.5, 1.0] {
+        for (x, y) in [(0.5, 0.5), (0.2, 0.7), (0.05, 0.5)] {
+            let ours = 100.0 * (1.0 - slab_factor(x, 1.0, 0.1, t) * slab_factor(y, 1.0, 0.1, t));
+            let theirs =
+                thm_mpm::reference::heated_square_temperature(x, y, 1.0, 0.1, t, 0.0, 100.0);
+            assert!(
+                (ours - theirs).abs() < 1e-9,
+                "t {t}, ({x}, {y}): {ours} vs {theirs}"
+            );
+        }
+    }
+}
+
+/// The square's RVE conducts B-Table 1's k on average, its points start at the consolidation
+/// stress, and the twin's affine moduli have ν = 0 (`D_xxyy = 0` for `k_n = k_t`).
+#[test]
+fn square_model_matches_its_packing() {
+    use thm_coupling::multiscale::square::{GranularSquare, SquareModel};
+    let m = SquareModel::new(&GranularSquare::reduced(4, 100, 1e4)).unwrap();
+    let k = m.state.points.conductivity[0];
+    assert!((0.5 * (k[0] + k[1]) - 0.1).abs() < 1e-12, "{k:?}");
+    let s = m.state.points.stress[0];
+    assert!((0.5 * (s[0] + s[1]) + 1e5).abs() < 0.01 * 1e5, "{s:?}");
+    assert!(m.twin_moduli[1].abs() < 1e-9, "{:?}", m.twin_moduli);
+    assert!(
+        m.twin_moduli[0] > 5e6 && m.twin_moduli[0] < 3e7,
+        "{:?}",
+        m.twin_moduli
+    );
+}

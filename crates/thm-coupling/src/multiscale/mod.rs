@@ -84,12 +84,39 @@
 //! `u = β∫₀ˣ T − (x/L) β∫₀ᴸ T`). The lattice expands by `β · 2r/a` (a = 2r − δ, 0.75 % more
 //! than β), which the analytical forms with β do not see.
 //!
-//! Units: SI; the MPM side of the rod in °C.
+//! ## The 2D square (B-Sect. 5.2.2, [`square`])
+//!
+//! `thm-mpm`'s TM-MPM square (grid, held normal displacements, 100 °C on all sides) with an
+//! RVE per point: random radii in [0.25, 0.5] mm consolidated with μ = 0.001 to 100 kPa and
+//! then given μ = 0.5 (with 0.001 the packing has almost no shear stiffness: points by the
+//! held sides shear without bound and an RVE cell collapses within 0.4 s), α set
+//! so that the mean of the packing's conductivity diagonal is B-Table 1's 0.1 W/(m K), and a
+//! pure-MPM twin with the RVE's affine moduli (B-Eq. 58; with `k_n = k_t`, `D_xxyy = 0`, so
+//! ν = 0, against the paper's 0.18 from a uniaxial test that includes non-affine motion) and
+//! the same mean conductivity. B-Eq. 59 is misprinted: its exponent is
+//! `π²((2m+1)² + (2n+1)²) κ t/L²`. A random RVE's conductivity is orthotropic, so the centre
+//! temperature is to be compared with the product of the two slab solutions
+//! ([`square::slab_factor`]) with `k_xx` and `k_yy` (tested equal to B-Eq. 59 when they are
+//! equal), and with B-Eq. 59 for their mean.
+//!
+//! **Status: built and tested as a model, not yet a verification case.** A reduced run
+//! (20 × 20 points, 100-disk RVEs, Δt = 2·10⁻⁴ s) needs `s = 10⁴` to stay at N = 2 DEM steps;
+//! at that scaling the RVEs are not quasi-static (largest inertial number 0.022, kinetic
+//! energy 4 % of elastic: the rule's limits flag it) and their friction heat drives the centre
+//! to 167 °C at 0.25 s, while the TM-MPM twin follows B-Eq. 59 (1.3 °C at 0.5 s, 0.17 °C at
+//! 1 s). With μ = 0.001 after consolidation an RVE next to a held side collapses at 0.4 s
+//! (cell narrower than its neighbour search; the error names point 10, step 1997 and
+//! `ε_v = 1.07`, `ε_q = 2.5`). Since `I ∝ √s`, a quasi-static run needs `s ≈ 20` (N ≈ 36 DEM
+//! steps per MPM step, 18 times the DEM work of that run), which does not fit a verification
+//! run on this machine yet.
+//!
+//! Units: SI; the MPM side of the rod and the square in °C.
 
 pub mod error;
 pub mod material;
 pub mod params;
 pub mod rod;
+pub mod square;
 pub mod stages;
 pub mod verification;
 
