@@ -2,6 +2,7 @@
 
 pub mod dem_uniaxial_tension_bar;
 pub mod lumped_cooling;
+pub mod mpm_dem_rod;
 pub mod mpm_semi_infinite_bar;
 pub mod pore_scale_bar;
 
@@ -12,8 +13,9 @@ use super::error::{ConfigError, RunError};
 use super::scenario::{self, DriveOptions, Outcome, Scenario, drive};
 
 /// The `kind` tags.
-const KINDS: [&str; 4] = [
+const KINDS: [&str; 5] = [
     lumped_cooling::LumpedCooling::KIND,
+    mpm_dem_rod::MpmDemRod::KIND,
     mpm_semi_infinite_bar::SemiInfiniteBar::KIND,
     dem_uniaxial_tension_bar::DemTensionBar::KIND,
     pore_scale_bar::PoreScaleBar::KIND,
@@ -44,6 +46,7 @@ pub fn validate(doc: &ScenarioDocument) -> Result<(), ConfigError> {
         mpm_semi_infinite_bar::SemiInfiniteBar::KIND => {
             scenario::validate::<mpm_semi_infinite_bar::SemiInfiniteBar>(doc)
         }
+        mpm_dem_rod::MpmDemRod::KIND => scenario::validate::<mpm_dem_rod::MpmDemRod>(doc),
         dem_uniaxial_tension_bar::DemTensionBar::KIND => {
             scenario::validate::<dem_uniaxial_tension_bar::DemTensionBar>(doc)
         }
@@ -70,6 +73,7 @@ pub fn dispatch(
         mpm_semi_infinite_bar::SemiInfiniteBar::KIND => {
             drive::<mpm_semi_infinite_bar::SemiInfiniteBar>(doc, file, opts)
         }
+        mpm_dem_rod::MpmDemRod::KIND => drive::<mpm_dem_rod::MpmDemRod>(doc, file, opts),
         dem_uniaxial_tension_bar::DemTensionBar::KIND => {
             drive::<dem_uniaxial_tension_bar::DemTensionBar>(doc, file, opts)
         }
