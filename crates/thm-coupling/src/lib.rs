@@ -78,9 +78,9 @@
 //! In place: the pore-scale step, implicit pressure and heat steps for long runs, the bar
 //! cases of A-Sects. 4, 5 and 6 case b (also as the `thm run` kind `pore_scale_bar`). Set up
 //! but not yet running to its end: A-Sect. 6 case a ([`bar::BarCase::ContractionFree`]). The
-//! MPM×DEM scheme with the granular rod of B-Sect. 5.2.1 and the model (not yet the case) of
-//! the square of B-Sect. 5.2.2; not yet here: the cases of B-Sect. 5.3 and the `thm run`
-//! kinds.
+//! MPM×DEM scheme with the granular rod of B-Sect. 5.2.1 (also as the `thm run` kind
+//! `mpm_dem_rod`) and the model (not yet the case) of the square of B-Sect. 5.2.2; not yet
+//! here: the cases of B-Sect. 5.3 and their `thm run` kinds.
 //!
 //! ## Verification ([`verification::cases`])
 //!
