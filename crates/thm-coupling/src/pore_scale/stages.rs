@@ -10,8 +10,8 @@ use thm_vpn_flow::{
     FlowConfig, FlowState, FlowStepper, Network, PoreFluid, SECOND_END, add_sphere_forces,
 };
 use thm_vpn_mesh::{
-    CellFilter, CircleMotion, Contact, MeshMotion, MeshSettings, PackingMesh, RemapOperator,
-    RemeshCriteria, RemeshReason, S2sApertureParams, mesh_packing, remesh_needed,
+    CellFilter, CellKind, CircleMotion, Contact, MeshMotion, MeshSettings, PackingMesh,
+    RemapOperator, RemeshCriteria, RemeshReason, S2sApertureParams, mesh_packing, remesh_needed,
 };
 
 use super::error::CouplingError;
@@ -310,6 +310,16 @@ pub fn heat_stage(
         });
     }
     let m = &mesh.mesh;
+    // Solid cells: the sphere's energy re-shared over its cells at their new capacities
+    // (one shift per sphere), so the balance below sees no capacity change in the solid.
+    reshare_solid_energy(&m.cell_kind, old, new, t_ref, &mut heat.temperature);
+    let old: Vec<f64> = old
+        .iter()
+        .zip(new)
+        .zip(&m.cell_kind)
+        .map(|((&o, &n), k)| if k.is_fluid() { o } else { n })
+        .collect();
+    let old = old.as_slice();
     let substeps = match parts.scheme {
         HeatScheme::Explicit => {
             for ((t, &c_old), &c_new) in heat.temperature.iter_mut().zip(old).zip(new) {
@@ -358,6 +368,47 @@ pub fn heat_stage(
     flow.close(fluid).map_err(CouplingError::Flow)?;
     check_closed(flow, "heat")?;
     Ok(substeps)
+}
+
+/// A sphere keeps the heat capacity of its mass, shared over its solid cells by area; when a
+/// mesh motion changes those areas (a chord moves as two spheres approach or part), each
+/// cell's capacity changes while the sphere's does not. Holding each cell's energy would heat
+/// a shrinking cell and cool a growing one (a cell that loses half its area would double its
+/// excess over `T_ref`); holding its temperature would change the sphere's energy. Instead
+/// every cell of sphere `s` is shifted by the same
+/// `δ_s = Σ (C^n − C^{n+1})(T − T_ref) / Σ C^{n+1}`, which keeps the sphere's energy to
+/// round-off and a uniform sphere uniform. Fluid cells are left alone.
+pub fn reshare_solid_energy(
+    kind: &[CellKind],
+    old_capacity: &[f64],
+    new_capacity: &[f64],
+    t_ref: f64,
+    temperature: &mut [f64],
+) {
+    let spheres = kind
+        .iter()
+        .filter_map(|k| match k {
+            CellKind::Solid { owner } => Some(*owner as usize + 1),
+            CellKind::Fluid => None,
+        })
+        .max()
+        .unwrap_or(0);
+    let (mut excess, mut capacity) = (vec![0.0; spheres], vec![0.0; spheres]);
+    for (c, k) in kind.iter().enumerate() {
+        if let CellKind::Solid { owner } = *k {
+            let s = owner as usize;
+            excess[s] += (old_capacity[c] - new_capacity[c]) * (temperature[c] - t_ref);
+            capacity[s] += new_capacity[c];
+        }
+    }
+    for (c, k) in kind.iter().enumerate() {
+        if let CellKind::Solid { owner } = *k {
+            let s = owner as usize;
+            if capacity[s] > 0.0 {
+                temperature[c] += excess[s] / capacity[s];
+            }
+        }
+    }
 }
 
 /// Stage 7 (A-Eq. 55): the volume-average temperature of each sphere's solid cells changes
@@ -479,22 +530,16 @@ pub fn remesh(
     }
     let old_solid =
         super::state::solid_cell_capacities(old_mesh, heat_params, &state.solid_area_ref);
-    let e_solid: Vec<f64> = old_solid
-        .iter()
-        .zip(&state.heat.temperature)
-        .map(|(c, t)| c * (t - t_ref))
-        .collect();
     let remap = |filter, old: &[f64]| -> Result<Vec<f64>, CouplingError> {
         let mut out = vec![0.0; nn];
         op.apply(filter, old, &mut out)
             .map_err(CouplingError::Mesh)?;
         Ok(out)
     };
-    let (mut nq, mut np_, mut nef, nes) = (
+    let (mut nq, mut np_, mut nef) = (
         remap(CellFilter::Fluid, &mq)?,
         remap(CellFilter::Fluid, &mp)?,
         remap(CellFilter::Fluid, &e_fluid)?,
-        remap(CellFilter::SameOwner, &e_solid)?,
     );
     let new_network = Network::from_mesh(&new.mesh, boundaries, boundary_reduction_factor)
         .map_err(CouplingError::Flow)?;
@@ -506,14 +551,20 @@ pub fn remesh(
         state.step,
     )?;
     spill_overfilled_pores(&new_network, &volume, [&mut nq, &mut np_, &mut nef]);
-    let mut temperature = vec![t_ref; nn];
     let new_solid =
         super::state::solid_cell_capacities(&new.mesh, heat_params, &state.solid_area_ref);
-    for c in 0..nn {
-        if !new.mesh.cell_kind[c].is_fluid() {
-            temperature[c] = t_ref + nes[c] / new_solid[c];
-        }
-    }
+    let mut temperature = remap_solid_temperature(
+        &op,
+        SolidCells {
+            kind: &old_mesh.cell_kind,
+            capacity: &old_solid,
+            temperature: &state.heat.temperature,
+        },
+        &new.mesh.cell_kind,
+        &new_solid,
+        t_ref,
+        state.step,
+    )?;
     let pores = new_network.n_pores();
     let (mut lq, mut lp, mut tp) = (
         Vec::with_capacity(pores),
@@ -559,6 +610,106 @@ pub fn remesh(
         flow,
         heat,
     }))
+}
+
+/// The solid cells of the old mesh, as [`remap_solid_temperature`] reads them.
+#[derive(Debug, Clone, Copy)]
+pub struct SolidCells<'a> {
+    /// Kind of every cell (fluid cells are skipped).
+    pub kind: &'a [CellKind],
+    /// Heat capacity of every cell \[J/K\] (zero for fluid cells).
+    pub capacity: &'a [f64],
+    /// Temperature of every cell \[K\].
+    pub temperature: &'a [f64],
+}
+
+/// The solid part of stage 8: temperatures of the new solid cells, sphere by sphere, so that
+/// each sphere keeps its thermal energy `Σ C (T − T_ref)` to round-off and a sphere of uniform
+/// temperature stays uniform.
+///
+/// Each new solid cell first takes the overlap-weighted mean temperature of the old cells of
+/// the same sphere it overlaps (the sphere's mean temperature where it overlaps none); then
+/// every cell of the sphere is shifted by the same `δ = (E_old − Σ C_new (T̃ − T_ref)) / Σ C_new`
+/// so that the sphere's energy is what it was. Moving energy instead (each old cell's
+/// `C (T − T_ref)` split over the admissible new cells it overlaps) concentrates a large old
+/// cell's energy in a small new one wherever the new mesh puts the sphere's boundary elsewhere
+/// (chords move as contacts open and close), giving temperatures far outside the old range.
+/// Fluid cells get `t_ref`; the caller fills them from the fluid remap.
+pub fn remap_solid_temperature(
+    op: &RemapOperator,
+    old: SolidCells<'_>,
+    new_kind: &[CellKind],
+    new_capacity: &[f64],
+    t_ref: f64,
+    step: u64,
+) -> Result<Vec<f64>, CouplingError> {
+    let owner = |k: CellKind| match k {
+        CellKind::Solid { owner } => Some(owner as usize),
+        CellKind::Fluid => None,
+    };
+    let spheres = old
+        .kind
+        .iter()
+        .chain(new_kind)
+        .filter_map(|&k| owner(k))
+        .max()
+        .map_or(0, |m| m + 1);
+    // Per sphere: old energy and capacity.
+    let (mut energy, mut old_cap) = (vec![0.0; spheres], vec![0.0; spheres]);
+    for (o, &k) in old.kind.iter().enumerate() {
+        if let Some(s) = owner(k) {
+            energy[s] += old.capacity[o] * (old.temperature[o] - t_ref);
+            old_cap[s] += old.capacity[o];
+        }
+    }
+    // Overlap-weighted mean of the same sphere's old temperatures on each new cell.
+    let nn = new_kind.len();
+    let (mut weighted, mut covered) = (vec![0.0; nn], vec![0.0; nn]);
+    for (o, &k) in old.kind.iter().enumerate() {
+        let Some(s) = owner(k) else { continue };
+        for (n, a) in op.overlaps(o) {
+            if owner(new_kind[n as usize]) == Some(s) {
+                weighted[n as usize] += a * old.temperature[o];
+                covered[n as usize] += a;
+            }
+        }
+    }
+    let mut temperature = vec![t_ref; nn];
+    let mut new_energy = vec![0.0; spheres];
+    let mut new_cap = vec![0.0; spheres];
+    for n in 0..nn {
+        let Some(s) = owner(new_kind[n]) else {
+            continue;
+        };
+        temperature[n] = if covered[n] > 0.0 {
+            weighted[n] / covered[n]
+        } else if old_cap[s] > 0.0 {
+            t_ref + energy[s] / old_cap[s]
+        } else {
+            t_ref
+        };
+        new_energy[s] += new_capacity[n] * (temperature[n] - t_ref);
+        new_cap[s] += new_capacity[n];
+    }
+    for s in 0..spheres {
+        if old_cap[s] > 0.0 && new_cap[s] <= 0.0 {
+            return Err(CouplingError::Unphysical {
+                stage: "remesh",
+                quantity: "solid heat capacity",
+                place: "sphere",
+                index: s,
+                value: new_cap[s],
+                step,
+                why: "the new mesh gives the sphere no solid cell to hold its energy",
+            });
+        }
+    }
+    for n in 0..nn {
+        if let Some(s) = owner(new_kind[n]) {
+            temperature[n] += (energy[s] - new_energy[s]) / new_cap[s];
+        }
+    }
+    Ok(temperature)
 }
 
 /// A pore whose cell keeps less than this fraction of its volume after one mesh motion
@@ -768,4 +919,159 @@ pub fn fill_uncovered_pores(
         });
     }
     Ok(filled)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pore_scale::Skeleton;
+    use crate::verification::{eager_remesh, lattice_params, lattice_state};
+
+    /// The old mesh of the test lattice and a new one with every sphere moved by a different
+    /// fraction of its radius (chords and arcs land elsewhere), with the overlap operator.
+    fn moved_meshes() -> (PackingMesh, PackingMesh, RemapOperator) {
+        let config = lattice_params(Skeleton::Free, eager_remesh())
+            .validate()
+            .expect("params");
+        let s = lattice_state(&config).expect("state");
+        let mut dem = s.dem.clone();
+        for (i, x) in dem.particles.position.iter_mut().enumerate() {
+            let r = dem.particles.radius[i];
+            x.x += 0.03 * r * ((i * 7 % 5) as f64 - 2.0);
+            x.y += 0.02 * r * ((i * 3 % 4) as f64 - 1.5);
+        }
+        let circles = circles_of(&dem);
+        let contacts = contacts_of(&dem, &circles);
+        let new = mesh_packing(&circles, &contacts, &config.mesh).expect("new mesh");
+        let op = RemapOperator::new(&s.mesh.mesh, &new.mesh).expect("operator");
+        (s.mesh, new, op)
+    }
+
+    fn capacities(mesh: &PackingMesh) -> Vec<f64> {
+        (0..mesh.mesh.n_cells())
+            .map(|c| match mesh.mesh.cell_kind[c] {
+                CellKind::Solid { .. } => 2.0e6 * mesh.mesh.cell_volume(c),
+                CellKind::Fluid => 0.0,
+            })
+            .collect()
+    }
+
+    fn sphere_energy(mesh: &PackingMesh, cap: &[f64], t: &[f64], t_ref: f64) -> Vec<f64> {
+        let mut e = vec![0.0; mesh.circles.len()];
+        for c in 0..mesh.mesh.n_cells() {
+            if let CellKind::Solid { owner } = mesh.mesh.cell_kind[c] {
+                e[owner as usize] += cap[c] * (t[c] - t_ref);
+            }
+        }
+        e
+    }
+
+    #[test]
+    fn resharing_keeps_each_sphere_energy_and_a_uniform_sphere_uniform() {
+        let (old, _, _) = moved_meshes();
+        let kind = &old.mesh.cell_kind;
+        let t_ref = 293.15;
+        let c_old = capacities(&old);
+        // Areas change cell by cell; each sphere's total stays.
+        let mut c_new: Vec<f64> = c_old
+            .iter()
+            .enumerate()
+            .map(|(c, &x)| x * (1.0 + 0.4 * ((c * 13 % 7) as f64 / 7.0 - 0.5)))
+            .collect();
+        let (a, b) = (
+            sphere_energy(&old, &c_old, &vec![t_ref + 1.0; kind.len()], t_ref),
+            sphere_energy(&old, &c_new, &vec![t_ref + 1.0; kind.len()], t_ref),
+        );
+        for (c, k) in kind.iter().enumerate() {
+            if let CellKind::Solid { owner } = *k {
+                c_new[c] *= a[owner as usize] / b[owner as usize];
+            }
+        }
+        let mut t: Vec<f64> = (0..kind.len())
+            .map(|c| 330.0 + 20.0 * ((c * 37 % 101) as f64 / 101.0))
+            .collect();
+        let before = sphere_energy(&old, &c_old, &t, t_ref);
+        reshare_solid_energy(kind, &c_old, &c_new, t_ref, &mut t);
+        let after = sphere_energy(&old, &c_new, &t, t_ref);
+        for (s, (b, a)) in before.iter().zip(&after).enumerate() {
+            assert!((a - b).abs() <= 1e-13 * b.abs(), "sphere {s}: {a} vs {b}");
+        }
+        let mut u: Vec<f64> = kind
+            .iter()
+            .map(|k| match k {
+                CellKind::Solid { owner } => 300.0 + *owner as f64,
+                CellKind::Fluid => 350.0,
+            })
+            .collect();
+        let want = u.clone();
+        reshare_solid_energy(kind, &c_old, &c_new, t_ref, &mut u);
+        for c in 0..kind.len() {
+            assert!((u[c] - want[c]).abs() <= 1e-12 * want[c], "cell {c}");
+        }
+    }
+
+    #[test]
+    fn solid_remap_keeps_each_sphere_energy_and_a_uniform_sphere_uniform() {
+        let (old, new, op) = moved_meshes();
+        let t_ref = 293.15;
+        let (old_cap, mut new_cap) = (capacities(&old), capacities(&new));
+        // The sphere keeps the capacity of its mass (as `solid_cell_capacities` scales it).
+        let (oc, nc) = (
+            sphere_energy(&old, &old_cap, &vec![t_ref + 1.0; old_cap.len()], t_ref),
+            sphere_energy(&new, &new_cap, &vec![t_ref + 1.0; new_cap.len()], t_ref),
+        );
+        for c in 0..new.mesh.n_cells() {
+            if let CellKind::Solid { owner } = new.mesh.cell_kind[c] {
+                new_cap[c] *= oc[owner as usize] / nc[owner as usize];
+            }
+        }
+        let kind = &old.mesh.cell_kind;
+        let owner_of = |k: CellKind| match k {
+            CellKind::Solid { owner } => owner as usize,
+            CellKind::Fluid => usize::MAX,
+        };
+        // Uniform per sphere (a different value for each): stays exactly uniform.
+        let uniform: Vec<f64> = kind
+            .iter()
+            .map(|&k| 300.0 + 3.0 * (owner_of(k) % 17) as f64)
+            .collect();
+        let cells = SolidCells {
+            kind,
+            capacity: &old_cap,
+            temperature: &uniform,
+        };
+        let t = remap_solid_temperature(&op, cells, &new.mesh.cell_kind, &new_cap, t_ref, 0)
+            .expect("remap");
+        for (c, &k) in new.mesh.cell_kind.iter().enumerate() {
+            if let CellKind::Solid { owner } = k {
+                let want = 300.0 + 3.0 * (owner as usize % 17) as f64;
+                assert!(
+                    (t[c] - want).abs() <= 1e-12 * want,
+                    "cell {c}: {} vs {want}",
+                    t[c]
+                );
+            }
+        }
+        // A field that varies within each sphere: each sphere's energy to round-off.
+        let varied: Vec<f64> = (0..kind.len())
+            .map(|c| 330.0 + 20.0 * ((c * 37 % 101) as f64 / 101.0))
+            .collect();
+        let cells = SolidCells {
+            temperature: &varied,
+            ..cells
+        };
+        let t = remap_solid_temperature(&op, cells, &new.mesh.cell_kind, &new_cap, t_ref, 0)
+            .expect("remap");
+        let before = sphere_energy(&old, &old_cap, &varied, t_ref);
+        let after = sphere_energy(&new, &new_cap, &t, t_ref);
+        for (s, (b, a)) in before.iter().zip(&after).enumerate() {
+            assert!((a - b).abs() <= 1e-13 * b.abs(), "sphere {s}: {a} vs {b}");
+        }
+        // And no temperature leaves the old range by more than a small share of it.
+        for (c, &k) in new.mesh.cell_kind.iter().enumerate() {
+            if !k.is_fluid() {
+                assert!((329.0..=351.0).contains(&t[c]), "cell {c}: {}", t[c]);
+            }
+        }
+    }
 }
