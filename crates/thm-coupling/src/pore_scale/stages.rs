@@ -1020,9 +1020,9 @@ mod tests {
             sphere_energy(&old, &old_cap, &vec![t_ref + 1.0; old_cap.len()], t_ref),
             sphere_energy(&new, &new_cap, &vec![t_ref + 1.0; new_cap.len()], t_ref),
         );
-        for c in 0..new.mesh.n_cells() {
-            if let CellKind::Solid { owner } = new.mesh.cell_kind[c] {
-                new_cap[c] *= oc[owner as usize] / nc[owner as usize];
+        for (cap, k) in new_cap.iter_mut().zip(&new.mesh.cell_kind) {
+            if let CellKind::Solid { owner } = *k {
+                *cap *= oc[owner as usize] / nc[owner as usize];
             }
         }
         let kind = &old.mesh.cell_kind;
