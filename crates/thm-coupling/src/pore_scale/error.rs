@@ -74,4 +74,23 @@ pub enum CouplingError {
         /// Its pressure \[Pa\].
         second_pressure: f64,
     },
+    /// The adaptive coupled step reached its smallest step and a sphere still moved more
+    /// than the rule allows in one step.
+    #[error(
+        "sphere {sphere} moved {displacement} m in one coupled step of {step_length} s at t =          {time} s, more than the allowed {limit} m, and the step cannot be shortened below          `min_step` = {min_step} s"
+    )]
+    CouplingStepTooSmall {
+        /// The sphere that moved furthest.
+        sphere: usize,
+        /// How far it moved \[m\].
+        displacement: f64,
+        /// The allowed displacement \[m\].
+        limit: f64,
+        /// The step tried \[s\].
+        step_length: f64,
+        /// The smallest step of the rule \[s\].
+        min_step: f64,
+        /// Simulated time at the start of the step \[s\].
+        time: f64,
+    },
 }

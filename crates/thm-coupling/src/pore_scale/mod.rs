@@ -62,11 +62,13 @@
 //! change of a fluid cell by the mass the flow moved is folded into its temperature before the
 //! heat step (see [`stages::heat_stage`]).
 
+mod adaptive;
 mod error;
 mod params;
 pub mod stages;
 mod state;
 
+pub use adaptive::{AdvanceReport, CouplingStepParams, CouplingStepRule, largest_displacement};
 pub use error::CouplingError;
 pub use params::{
     FlowBoundary, FlowScheme, HeatScheme, PoreScaleConfig, PoreScaleParams, Skeleton,
@@ -168,6 +170,25 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             old_capacity: Vec::new(),
             new_capacity: Vec::new(),
         })
+    }
+
+    /// Rebuilds what the stepper derives from `state` (after the caller replaced the state,
+    /// as a rejected adaptive step does): the same as a new stepper for it.
+    pub fn rebuild(&mut self, state: &PoreScaleState) -> Result<(), CouplingError> {
+        let (network, heat_model, heat_geometry) = derived(&self.config, state)?;
+        self.network = network;
+        self.heat_model = heat_model;
+        self.heat_geometry = heat_geometry;
+        self.dem = None;
+        self.flow = FlowStepper::new(self.config.flow);
+        self.heat = HeatStepper::new();
+        self.motion = MeshMotion::new();
+        self.input = FlowInput::liquid_at_rest(&state.mesh.mesh, 1.0, 1.0);
+        self.force.clear();
+        self.dv_dt.clear();
+        self.old_capacity.clear();
+        self.new_capacity.clear();
+        Ok(())
     }
 
     /// The configuration.

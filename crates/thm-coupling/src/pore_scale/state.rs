@@ -50,6 +50,11 @@ pub struct PoreScaleState {
     /// so its heat capacity `ρ_s c_s A_ref b`, stays while its cross-section shrinks or swells
     /// (A-Eq. 55) and its cells change; see [`solid_capacity_scale`].
     pub solid_area_ref: Vec<f64>,
+    /// The coupled step the adaptive rule tries next \[s\] (0: its largest step); see
+    /// [`super::PoreScaleStepper::advance`]. Part of the state so that a restored run takes
+    /// the same steps.
+    #[serde(default)]
+    pub coupling_step: f64,
 }
 
 /// Solid area of each sphere's cells in `mesh` \[m²\] (`n` spheres).
@@ -231,6 +236,7 @@ impl PoreScaleState {
             heat,
             remeshes: 0,
             solid_area_ref,
+            coupling_step: 0.0,
         })
     }
 
