@@ -167,3 +167,64 @@ fn bad_rules_name_the_field() {
     let err = serde_json::from_str::<CouplingStepParams>(text).expect_err("unknown field");
     assert!(err.to_string().contains("speed"), "{err}");
 }
+
+/// The test packing with bonds a thousand times weaker than A-Table 1's, so that the fluid
+/// forces and the thermal gradient break some within a few steps.
+fn weak_bonds() -> thm_coupling::pore_scale::PoreScaleConfig {
+    let mut p = params(Skeleton::Free, eager_remesh());
+    p.contact.tensile_strength *= 1e-3;
+    p.contact.cohesion *= 1e-3;
+    p.validate().expect("params")
+}
+
+fn broken(s: &PoreScaleState) -> usize {
+    s.dem
+        .contacts
+        .history
+        .iter()
+        .filter(|h| h.bond == thm_dem::BondState::Broken)
+        .count()
+}
+
+/// Runs the weak-bond packing for `intervals` intervals of 2·10⁻⁵ s under the adaptive rule.
+fn run_breaking(s: &mut PoreScaleState, intervals: usize) {
+    let config = weak_bonds();
+    let rule = rule(1e-5, 1e-9, 0.02).validate().expect("rule");
+    let mut st = stepper(&config, s);
+    for _ in 0..intervals {
+        st.advance(s, 2e-5, &rule).expect("advance");
+    }
+}
+
+#[test]
+fn through_breakage_and_remeshing_one_and_two_threads_and_a_restore_give_the_same_bits() {
+    let config = weak_bonds();
+    let s0 = state(&config);
+    let pool = |n| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .expect("pool")
+    };
+    let run = |threads: usize| {
+        pool(threads).install(|| {
+            let mut s = s0.clone();
+            run_breaking(&mut s, 3);
+            let half = (broken(&s), serde_json::to_string(&s).expect("save"));
+            run_breaking(&mut s, 3);
+            (half, s)
+        })
+    };
+    let ((broken_half, saved), one) = run(1);
+    let (_, two) = run(2);
+    assert!(
+        broken(&one) > broken_half && broken_half > 0,
+        "bonds must break before and after the save: {broken_half} then {}",
+        broken(&one)
+    );
+    assert!(one.remeshes > 0);
+    assert_eq!(one, two);
+    let mut restored: PoreScaleState = serde_json::from_str(&saved).expect("load");
+    run_breaking(&mut restored, 3);
+    assert_eq!(one, restored);
+}
