@@ -46,8 +46,13 @@
 //! 4. **Contacts of the mesh.** Every overlapping pair of circles is a mesh contact; its σ_n is
 //!    that of the DEM contact of the pair (zero where the DEM has no active contact).
 //! 5. **Remap.** Pressures and fractions are not remapped: they follow from the remapped masses
-//!    (A-Sect. 2.4); temperatures are remapped energy over the new capacities, and the spheres'
-//!    T_avg^n is reset to the new cells' mean so that the remap changes no radius.
+//!    (A-Sect. 2.4); fluid temperatures are remapped energy over the new capacities; solid
+//!    temperatures are remapped sphere by sphere (the overlap-weighted mean of the sphere's old
+//!    cells, then one shift that restores the sphere's energy, so a uniform sphere stays
+//!    uniform), as is the re-sharing of a sphere's capacity when mesh motion changes its cells'
+//!    areas; the spheres' T_avg^n is reset to the new cells' mean so that the remap changes no
+//!    radius. A moving skeleton runs under an adaptive coupled step
+//!    ([`pore_scale::PoreScaleStepper::advance`]) that bounds each step's sphere motion.
 //!
 //! Units: SI throughout (m, kg, s, K, Pa, J, W). Valid where the composed crates are: laminar
 //! channel flow, pore fluids inside the EOS's range, Δt_D below the DEM's critical step.
