@@ -80,3 +80,6 @@ seconds = time.perf_counter() - t0
 intact = sum(1 for i in O.interactions if i.isReal and not i.phys.cohesionBroken)
 print('bonds intact %d of %d; largest normal force after the first step %.3g N' % (intact, len(bonds), max_fn))
 print('%d %d %.6f %.1f' % (len(ids), steps, seconds, len(ids) * steps / seconds))
+# The same observable as dem_peer's: translational + rotational kinetic energy after the timed
+# steps [J], so a run shows both codes did the same physics.
+print('kinetic_energy %.9e' % utils.kineticEnergy())
