@@ -145,16 +145,38 @@ impl<W: Write> Write for Summing<W> {
     }
 }
 
-/// The size of the binary payload of `state`, without writing it.
-fn binary_payload_len<T: Serialize>(state: &T) -> std::io::Result<u64> {
-    let mut counter = Summing {
-        inner: std::io::sink(),
-        crc: crc32fast::Hasher::new(),
+/// A sink that counts bytes and refuses any beyond `cap`.
+struct Capped {
+    len: u64,
+    cap: u64,
+}
+
+impl Write for Capped {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.len += buf.len() as u64;
+        if self.len > self.cap {
+            return Err(std::io::Error::other("cap reached"));
+        }
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// Whether the binary payload of `state` has at least `cap` bytes. Stops encoding at the cap,
+/// so it costs at most `cap` bytes of encoding whatever the state's size.
+fn binary_payload_reaches<T: Serialize>(state: &T, cap: u64) -> std::io::Result<bool> {
+    let mut sink = Capped {
         len: 0,
+        cap: cap.saturating_sub(1),
     };
-    bincode::serde::encode_into_std_write(state, &mut counter, bincode_config())
-        .map_err(std::io::Error::other)?;
-    Ok(counter.len)
+    match bincode::serde::encode_into_std_write(state, &mut sink, bincode_config()) {
+        Ok(_) => Ok(false),
+        Err(_) if sink.len > sink.cap => Ok(true),
+        Err(e) => Err(std::io::Error::other(e)),
+    }
 }
 
 fn check_tag(what: &'static str, text: &str) -> Result<(), IoError> {
@@ -190,8 +212,9 @@ pub fn save_checkpoint_as<T: Serialize>(
     check_tag("checkpoint kind tag length [bytes]", kind)?;
     let encoding = match encoding {
         CheckpointEncoding::Auto => {
-            let len = binary_payload_len(state).map_err(|e| IoError::file(path, "encode", e))?;
-            if len >= AUTO_BINARY_FROM {
+            let large = binary_payload_reaches(state, AUTO_BINARY_FROM)
+                .map_err(|e| IoError::file(path, "encode", e))?;
+            if large {
                 CheckpointEncoding::Binary
             } else {
                 CheckpointEncoding::Json

@@ -252,3 +252,22 @@ fn a_binary_header_with_a_huge_or_invalid_tag_is_refused() {
     let err = save_checkpoint(&dir.join("never.ckpt"), &long, 1, &1u8).unwrap_err();
     assert!(matches!(err, IoError::BadValue { .. }), "{err}");
 }
+
+/// The form switches exactly at [`AUTO_BINARY_FROM`] bytes of binary payload (a `Vec<u8>` of
+/// `n ≥ 2¹⁶` bytes encodes as a 5-byte length and its bytes).
+#[test]
+fn auto_switches_at_exactly_the_threshold() {
+    let dir = std::env::temp_dir().join(format!("thm-io-ckpt-auto-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("s.ckpt");
+    let at = AUTO_BINARY_FROM as usize - 5;
+    for (n, binary) in [(at - 1, false), (at, true)] {
+        let state = vec![7u8; n];
+        save_checkpoint(&p, "bytes", 1, &state).unwrap();
+        let bytes = std::fs::read(&p).unwrap();
+        assert_eq!(bytes.starts_with(BINARY_MAGIC), binary, "{n} bytes");
+        let back: Vec<u8> = checkpoint_from_bytes(&p, &bytes, "bytes", 1).unwrap();
+        assert_eq!(back, state);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
