@@ -8,7 +8,14 @@
 //! dem_peer run-bed FILE STEPS DT THREADS        # linear spring + Coulomb, gravity, floor
 //! ```
 //!
-//! `run-*` prints one line: `particles steps seconds particle_steps_per_second`.
+//! `run-*` prints `particles steps seconds particle_steps_per_second` on its first line (the
+//! timed steps only, after one untimed step), then two lines that let a run be checked against
+//! the peer's:
+//!
+//! ```text
+//! neighbour_builds B     # neighbour-list builds (Verlet searches) during the timed steps
+//! kinetic_energy E       # total kinetic energy after them, translational + rotational [J]
+//! ```
 
 use std::path::Path;
 use std::time::Instant;
@@ -81,7 +88,7 @@ fn run() -> Result<(), String> {
                 .num_threads(threads)
                 .build()
                 .map_err(|e| e.to_string())?;
-            let (n, seconds) = if cmd == "run-cohesive" {
+            let timed = if cmd == "run-cohesive" {
                 let mut state = packing
                     .to_state(2600.0, 293.15)
                     .map_err(|e| e.to_string())?;
@@ -106,14 +113,32 @@ fn run() -> Result<(), String> {
                 };
                 time_run(&pool, &mut state, law, params, steps)?
             };
+            let Timed {
+                particles: n,
+                seconds,
+                builds,
+                kinetic_energy,
+            } = timed;
             println!(
                 "{n} {steps} {seconds:.6} {:.1}",
                 n as f64 * steps as f64 / seconds
             );
+            println!("neighbour_builds {builds}");
+            println!("kinetic_energy {kinetic_energy:.9e}");
             Ok(())
         }
         _ => Err("usage: see the module documentation of benchmarks/src/bin/dem_peer.rs".into()),
     }
+}
+
+/// What a timed run reports.
+struct Timed {
+    particles: usize,
+    seconds: f64,
+    /// Neighbour-list builds during the timed steps.
+    builds: u64,
+    /// Total kinetic energy after the timed steps \[J\].
+    kinetic_energy: f64,
 }
 
 fn time_run<L: ContactLaw>(
@@ -122,14 +147,24 @@ fn time_run<L: ContactLaw>(
     law: L,
     params: StepperParams,
     steps: u64,
-) -> Result<(usize, f64), String> {
+) -> Result<Timed, String> {
     let mut stepper = Stepper::new(law, params.validate().map_err(|e| e.to_string())?);
     pool.install(|| stepper.step(state))
         .map_err(|e| e.to_string())?;
+    // Each neighbour search increments the contact generation once; nothing else in these
+    // runs does (no caller edits the contact lists), so the difference counts the builds
+    // without touching the timed loop.
+    let generation = state.contact_generation;
     let t0 = Instant::now();
     pool.install(|| stepper.run(state, steps))
         .map_err(|e| e.to_string())?;
-    Ok((state.particles.len(), t0.elapsed().as_secs_f64()))
+    let seconds = t0.elapsed().as_secs_f64();
+    Ok(Timed {
+        particles: state.particles.len(),
+        seconds,
+        builds: state.contact_generation - generation,
+        kinetic_energy: state.particles.kinetic_energy(),
+    })
 }
 
 fn bed_law() -> Result<LinearSpring, String> {
