@@ -121,8 +121,20 @@ struct VersionProbe {
     format_version: u32,
 }
 
+/// Largest binary payload decoded \[bytes\]: a length field claiming more is an error before
+/// anything is allocated (a corrupt length once asked for a capacity beyond `isize::MAX`).
+const DECODE_LIMIT: usize = 1 << 40;
+
 fn bincode_config() -> bincode::config::Configuration {
     bincode::config::standard()
+}
+
+fn bincode_decode_config() -> bincode::config::Configuration<
+    bincode::config::LittleEndian,
+    bincode::config::Varint,
+    bincode::config::Limit<DECODE_LIMIT>,
+> {
+    bincode::config::standard().with_limit::<DECODE_LIMIT>()
 }
 
 /// A writer that feeds a CRC-32 and counts the bytes it passes on.
@@ -323,7 +335,7 @@ pub fn checkpoint_from_bytes<T: DeserializeOwned>(
         }
         StateBytes::Binary(payload) => {
             let (state, used) =
-                bincode::serde::decode_from_slice::<T, _>(payload, bincode_config())
+                bincode::serde::decode_from_slice::<T, _>(payload, bincode_decode_config())
                     .map_err(|e| state_error(clip(&e.to_string())))?;
             if used != payload.len() {
                 return Err(state_error(format!(

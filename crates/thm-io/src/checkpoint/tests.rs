@@ -271,3 +271,35 @@ fn auto_switches_at_exactly_the_threshold() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Found by the `checkpoint` fuzz target: a binary payload whose length field claims more
+/// than `isize::MAX` elements made the decoder ask for that capacity and panic. It is now a
+/// typed error (`fuzz/regressions/checkpoint/capacity-overflow`).
+#[test]
+fn a_huge_length_in_the_payload_is_an_error_not_a_panic() {
+    #[derive(Debug, Deserialize)]
+    #[allow(dead_code)]
+    enum Shape {
+        Empty,
+        Radius(f64),
+        Box { side: [f64; 2] },
+    }
+    #[derive(Debug, Deserialize)]
+    #[allow(dead_code)]
+    struct FuzzState {
+        step: u64,
+        name: String,
+        x: Vec<f64>,
+        pairs: Vec<(u32, u32)>,
+        flag: Option<bool>,
+        shape: Shape,
+    }
+    // The target seals its input with a valid checksum before decoding; so does this test.
+    let mut bytes =
+        include_bytes!("../../../../fuzz/regressions/checkpoint/capacity-overflow").to_vec();
+    let n = bytes.len();
+    let crc = crc32fast::hash(&bytes[..n - 4]);
+    bytes[n - 4..].copy_from_slice(&crc.to_le_bytes());
+    let err = checkpoint_from_bytes::<FuzzState>(&path(), &bytes, "fuzz", 1).unwrap_err();
+    assert!(matches!(err, IoError::CheckpointState { .. }), "{err}");
+}
