@@ -117,8 +117,14 @@ pub fn largest_displacement(before: &PoreScaleState, after: &PoreScaleState) -> 
 }
 
 impl<F: PoreFluid> PoreScaleStepper<F> {
-    /// Advances `state` by `dt` \[s\] in coupled steps chosen by `rule` (see [`self`]); the
-    /// last step ends exactly at the end of `dt`. A step that fails (an error of any stage) is
+    /// Advances `state` by `dt` \[s\] in coupled steps chosen by `rule`; the last step ends
+    /// exactly at the end of `dt`. The coupled step holds the fluid forces over its length, so
+    /// a sphere that a breaking bond releases keeps the whole fluid force of the step's start
+    /// with nothing to balance it: a step is accepted when no sphere moved more than
+    /// [`CouplingStepParams::max_displacement`] times the smallest radius, and is otherwise
+    /// taken again from the saved state at half the length (the stepper rebuilt from it, as
+    /// after a checkpoint); after each accepted step the next is
+    /// [`CouplingStepParams::growth`] times longer, up to [`CouplingStepParams::max_step`]. A step that fails (an error of any stage) is
     /// also taken again shorter; at `min_step` its error is returned, with the state restored
     /// to the start of that step.
     pub fn advance(
