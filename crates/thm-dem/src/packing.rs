@@ -131,6 +131,20 @@ pub struct PackingReport {
     pub bond_coordination: f64,
 }
 
+/// Most characters of a bad field that a packing-file error quotes.
+pub const QUOTE_CHARS: usize = 48;
+
+/// `field`, or its first [`QUOTE_CHARS`] characters followed by `…` when longer.
+fn quote(field: &str) -> String {
+    if field.chars().count() <= QUOTE_CHARS {
+        field.to_owned()
+    } else {
+        let mut q: String = field.chars().take(QUOTE_CHARS).collect();
+        q.push('…');
+        q
+    }
+}
+
 impl Packing {
     /// The particle state (uniform density \[kg/m³\] and temperature \[K\]) with the bonds
     /// installed stress-free at their current distance.
@@ -192,7 +206,8 @@ impl Packing {
         s
     }
 
-    /// Reads the CSV written by [`Packing::to_csv`].
+    /// Reads the CSV written by [`Packing::to_csv`]. Errors name the line and quote at most
+    /// [`QUOTE_CHARS`] characters of the offending field.
     pub fn from_csv(text: &str) -> Result<Self, DemError> {
         let err = |line: usize, reason: String| DemError::PackingFile { line, reason };
         let mut kinematics = None;
@@ -208,7 +223,12 @@ impl Packing {
                         "spheres_3d" => Kinematics::Spheres3d,
                         "spheres_in_plane" => Kinematics::SpheresInPlane,
                         "disks" => Kinematics::Disks,
-                        other => return Err(err(line, format!("unknown kinematics `{other}`"))),
+                        other => {
+                            return Err(err(
+                                line,
+                                format!("unknown kinematics `{}`", quote(other)),
+                            ));
+                        }
                     });
                 }
                 continue;
@@ -223,11 +243,11 @@ impl Packing {
                     .ok_or_else(|| err(line, format!("missing field {}", i + 1)))?;
                 let v: f64 = f
                     .parse()
-                    .map_err(|_| err(line, format!("`{f}` is not a number")))?;
+                    .map_err(|_| err(line, format!("`{}` is not a number", quote(f))))?;
                 if v.is_finite() {
                     Ok(v)
                 } else {
-                    Err(err(line, format!("`{f}` is not finite")))
+                    Err(err(line, format!("`{}` is not finite", quote(f))))
                 }
             };
             match fields[0] {
@@ -244,12 +264,13 @@ impl Packing {
                         let f = fields
                             .get(i)
                             .ok_or_else(|| err(line, format!("missing field {}", i + 1)))?;
-                        f.parse()
-                            .map_err(|_| err(line, format!("`{f}` is not a particle index")))
+                        f.parse().map_err(|_| {
+                            err(line, format!("`{}` is not a particle index", quote(f)))
+                        })
                     };
                     bonds.push((idx(1)?, idx(2)?));
                 }
-                other => return Err(err(line, format!("unknown row kind `{other}`"))),
+                other => return Err(err(line, format!("unknown row kind `{}`", quote(other)))),
             }
         }
         let n = centres.len();

@@ -154,3 +154,26 @@ fn area_porosity_rejects_a_bad_cell() {
         Err(DemError::InvalidParameter { field: "cell", .. })
     ));
 }
+
+#[test]
+fn a_bad_packing_row_is_quoted_short_whatever_its_length() {
+    let long = "x".repeat(5000);
+    for text in [
+        format!("{long},1,2,3,4\n"),
+        format!("particle,{long},0,0,1\n"),
+        format!("bond,0,{long}\n"),
+        format!("# kinematics={long}\n"),
+    ] {
+        let message = thm_dem::packing::Packing::from_csv(&text)
+            .expect_err("bad row")
+            .to_string();
+        assert!(message.contains("line 1"), "{message}");
+        assert!(message.contains('…'), "{message}");
+        assert!(message.chars().count() < 200, "{message}");
+    }
+    // A short field is quoted whole.
+    let message = thm_dem::packing::Packing::from_csv("particle,abc,0,0,1\n")
+        .expect_err("bad number")
+        .to_string();
+    assert!(message.contains("`abc` is not a number"), "{message}");
+}
