@@ -206,7 +206,7 @@ impl HeatStepper {
             advected = true;
             let [a, b] = mesh.channels.cells[k].map(|c| c as usize);
             let (up, down) = if m > 0.0 { (a, b) } else { (b, a) };
-            let rate = m.abs() * cp[up];
+            let rate = m.abs() * input.channel_cp(k, cp[up]);
             diag[up] += rate;
             rhs[up] += rate * t_ref;
             full.push(Triplet::new(down, up, -rate));

@@ -46,9 +46,25 @@ pub struct FlowInput {
     /// Mass flux through each face \[kg/s\], positive outward; only boundary faces of fluid
     /// cells may be non-zero (inflow/outflow through the specimen's boundary).
     pub boundary_mass_flux: Vec<f64>,
+    /// Specific heat of what each channel carried over the step \[J/(kg K)\]: with phase
+    /// transfers `M_q`, `M_p`, `(M_q c_q + M_p c_p) / (M_q + M_p)`. Empty: the upwind cell's
+    /// mixture value (mass-weighted). A flow solver that moves the phases in other
+    /// proportions than the upwind cell holds at the end of the step must give it: the
+    /// advected heat capacity `ṁ c` then equals the capacity the cells exchanged, so a cell's
+    /// capacity change and its advected heat stay consistent (no spurious heating or cooling
+    /// of a uniform field; see `channel_specific_heat_keeps_a_uniform_field_uniform`).
+    #[serde(default)]
+    pub channel_specific_heat: Vec<f64>,
 }
 
 impl FlowInput {
+    /// The specific heat channel `k` advects with: [`Self::channel_specific_heat`] where
+    /// given, else `upwind` (the upwind cell's mixture value) \[J/(kg K)\].
+    #[inline]
+    pub(crate) fn channel_cp(&self, k: usize, upwind: f64) -> f64 {
+        self.channel_specific_heat.get(k).copied().unwrap_or(upwind)
+    }
+
     /// Fluid at rest, fully liquid with uniform density `liquid_density`; the gas density is
     /// set to `gas_density` (irrelevant while α_q = 1).
     pub fn liquid_at_rest(mesh: &PoreMesh, liquid_density: f64, gas_density: f64) -> Self {
@@ -59,6 +75,7 @@ impl FlowInput {
             gas_density: vec![gas_density; n],
             channel_mass_flux: vec![0.0; mesh.channels.len()],
             boundary_mass_flux: vec![0.0; mesh.n_faces()],
+            channel_specific_heat: Vec::new(),
         }
     }
 
@@ -148,6 +165,22 @@ impl FlowInput {
 
     /// The mass-flux checks of [`Self::validate`] (lengths checked).
     pub(crate) fn check_fluxes(&self, mesh: &PoreMesh) -> Result<(), HeatError> {
+        let cp = &self.channel_specific_heat;
+        if !cp.is_empty() && cp.len() != mesh.channels.len() {
+            return Err(HeatError::LengthMismatch {
+                what: "channel_specific_heat",
+                expected: mesh.channels.len(),
+                got: cp.len(),
+            });
+        }
+        if let Some(k) = first_where(cp.len(), |k| !(cp[k].is_finite() && cp[k] > 0.0)) {
+            return Err(HeatError::InputOutOfRange {
+                quantity: "channel_specific_heat",
+                index: k,
+                range: "finite and > 0 J/(kg K)",
+                value: cp[k],
+            });
+        }
         let flux = &self.channel_mass_flux;
         if let Some(k) = first_where(flux.len(), |k| !flux[k].is_finite()) {
             return Err(HeatError::InputOutOfRange {

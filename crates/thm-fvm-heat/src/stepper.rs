@@ -664,7 +664,7 @@ impl HeatStepper {
                         let m = flux[k];
                         let out = if second { -m } else { m };
                         if out > 0.0 {
-                            conductance += ADVECTIVE_FACTOR * out * cp[i];
+                            conductance += ADVECTIVE_FACTOR * out * input.channel_cp(k, cp[i]);
                         }
                     }
                     if HEAT {
@@ -1022,14 +1022,16 @@ impl HeatStepper {
             g.par_chunks(GRAIN),
         )
             .into_par_iter()
-            .for_each(|(heat, cells, kinds, fluxes, points, g)| {
-                for (((((q, cells), kind), &m), point), &g) in heat
+            .enumerate()
+            .for_each(|(chunk, (heat, cells, kinds, fluxes, points, g))| {
+                for (i, (((((q, cells), kind), &m), point), &g)) in heat
                     .iter_mut()
                     .zip(cells)
                     .zip(kinds)
                     .zip(fluxes)
                     .zip(points)
                     .zip(g)
+                    .enumerate()
                 {
                     let [a, b] = cells.map(|c| c as usize);
                     let adv = if m != 0.0 {
@@ -1042,7 +1044,7 @@ impl HeatStepper {
                             // No face: first-order upwind.
                             ChannelKind::S2S => temp[up],
                         };
-                        m * cp[up] * (tf - t_ref)
+                        m * input.channel_cp(chunk * GRAIN + i, cp[up]) * (tf - t_ref)
                     } else {
                         0.0
                     };

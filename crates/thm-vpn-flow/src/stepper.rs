@@ -552,6 +552,7 @@ pub struct FlowStepper {
     pub(crate) rates: Vec<PoreRate>,
     pub(crate) inflow: Vec<GroupInflow>,
     pub(crate) channel_mass: Vec<f64>,
+    pub(crate) channel_liquid_mass: Vec<f64>,
     pub(crate) link_mass: Vec<f64>,
 }
 
@@ -565,6 +566,7 @@ impl FlowStepper {
             rates: Vec::new(),
             inflow: Vec::new(),
             channel_mass: Vec::new(),
+            channel_liquid_mass: Vec::new(),
             link_mass: Vec::new(),
         }
     }
@@ -590,6 +592,13 @@ impl FlowStepper {
     /// with, consistent with the mass the pores exchanged.
     pub fn channel_mass_transfer(&self) -> &[f64] {
         &self.channel_mass
+    }
+
+    /// The liquid part of [`Self::channel_mass_transfer`] \[kg\]: `Σ_sub h ṁ_q`, same sign
+    /// convention. With it a heat solver advects each phase's heat capacity
+    /// (`M_q c_q + (M − M_q) c_p`), which is what the pores' capacities changed by.
+    pub fn channel_liquid_transfer(&self) -> &[f64] {
+        &self.channel_liquid_mass
     }
 
     /// Mass (both phases) that entered the domain through each boundary link during the last
@@ -668,6 +677,8 @@ impl FlowStepper {
         self.prepare(network, state, fluid, dv_dt)?;
         self.channel_mass.clear();
         self.channel_mass.resize(network.n_channels(), 0.0);
+        self.channel_liquid_mass.clear();
+        self.channel_liquid_mass.resize(network.n_channels(), 0.0);
         self.link_mass.clear();
         self.link_mass.resize(network.n_links(), 0.0);
         let ng = network.n_groups();
@@ -698,8 +709,14 @@ impl FlowStepper {
             report.boundary_liquid_rate[g] += f.liquid;
             report.boundary_gas_rate[g] += f.gas;
         }
-        for (m, f) in self.channel_mass.iter_mut().zip(&self.channel) {
+        for ((m, q), f) in self
+            .channel_mass
+            .iter_mut()
+            .zip(&mut self.channel_liquid_mass)
+            .zip(&self.channel)
+        {
             *m += h * (f.liquid + f.gas);
+            *q += h * f.liquid;
         }
         for (m, f) in self.link_mass.iter_mut().zip(&self.link) {
             *m += h * (f.liquid + f.gas);

@@ -332,6 +332,10 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             &mut state.flow,
             &mut self.dv_dt,
             &mut self.input,
+            [
+                self.config.params.heat.liquid.specific_heat,
+                self.config.params.heat.gas.specific_heat,
+            ],
             dt,
         )?;
         lap(&mut seconds.flow);
