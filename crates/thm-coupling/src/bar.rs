@@ -1,6 +1,9 @@
 //! The bonded bar of Krzaczek et al. (2023), A-Fig. 8, and the coupled fluid–heat cases run
 //! on it: the cooling bar (A-Sect. 4, A-Fig. 11), the advection bar (A-Sect. 5, A-Fig. 14)
-//! and the thermal contraction test with every sphere held (A-Sect. 6 case b, A-Fig. 18).
+//! and the thermal contraction test with every sphere held (A-Sect. 6 case b, A-Fig. 18) or
+//! only the end spheres held (case a: the skeleton contracts and cracks; its DEM mass
+//! scaling, coupled-step rule and crack measures are [`CASE_A_DENSITY_SCALE`],
+//! [`case_a_coupling_step`] and [`crack_report`]).
 //!
 //! The packing is `thm-vpn-mesh`'s seeded 20 × 80 mm bar of 4–8 mm circles at about 10 %
 //! porosity; every overlapping pair is bonded. The figures with the boundary conditions
@@ -40,8 +43,8 @@ use thm_vpn_mesh::packing::{PackingSpec, random_packing};
 use thm_vpn_mesh::{BoundarySide, MeshParams, Outline, RemeshCriteriaParams};
 
 use crate::pore_scale::{
-    CouplingError, FlowBoundary, FlowScheme, HeatScheme, InitialFluid, PoreScaleConfig,
-    PoreScaleParams, PoreScaleState, Skeleton,
+    CouplingError, CouplingStepParams, FlowBoundary, FlowScheme, HeatScheme, InitialFluid,
+    PoreScaleConfig, PoreScaleParams, PoreScaleState, Skeleton,
 };
 
 /// Width of the bar (x) \[m\].
@@ -333,4 +336,124 @@ pub fn mean_mass_flux(state: &PoreScaleState) -> f64 {
     } else {
         0.0
     }
+}
+
+/// Mass scaling of the DEM in case a: the spheres' masses and inertias × [`CASE_A_DENSITY_SCALE`]
+/// and the DEM step × its square root (Δt_D ∝ √(m/k)). The contraction and cracking take
+/// seconds, the elastic waves of the bar microseconds: at the real density A-Table 1's
+/// Δt_D = 2·10⁻⁷ s needs 8.5·10⁷ DEM steps for 17 s. ×100 keeps the bar's lowest mode
+/// (about 40 µs at the real density, 0.4 ms scaled) four orders of magnitude faster than the
+/// cooling, so the skeleton still follows the temperature quasi-statically; what it changes is
+/// how long a released sphere takes to settle after a bond breaks (10× longer).
+pub const CASE_A_DENSITY_SCALE: f64 = 100.0;
+
+/// The coupled-step rule of case a (see [`crate::pore_scale::PoreScaleStepper::advance`]):
+/// steps up to 0.01 s, none moving a sphere by more than 1 % of the smallest radius, halved
+/// down to 10⁻⁷ s, grown by 1.2 after each accepted step.
+pub fn case_a_coupling_step() -> CouplingStepParams {
+    CouplingStepParams {
+        max_step: 0.01,
+        min_step: 1e-7,
+        max_displacement: 0.01,
+        growth: 1.2,
+    }
+}
+
+/// Multiplies every sphere's mass and moment of inertia by `factor` (≥ 1): DEM mass scaling.
+/// The caller multiplies the DEM time step by `√factor` (the stable step scales so). Thermal
+/// capacities are untouched: the heat solver takes the solid's `ρ c` from its own parameters.
+pub fn scale_sphere_density(state: &mut PoreScaleState, factor: f64) -> Result<(), CouplingError> {
+    if !(factor.is_finite() && factor >= 1.0) {
+        return Err(CouplingError::Parameter {
+            field: "density_scale",
+            range: ">= 1 and finite",
+            value: factor,
+        });
+    }
+    let p = &mut state.dem.particles;
+    for m in p.mass.iter_mut().chain(p.inertia.iter_mut()) {
+        *m *= factor;
+    }
+    Ok(())
+}
+
+/// What case a's summary reports about the crack (A-Sect. 6, A-Figs. 19–22), read from the
+/// state at any time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CrackReport {
+    /// Bonds broken so far (every break event of the run, tension or shear).
+    pub broken_bonds: usize,
+    /// Of those, broken in tension.
+    pub broken_in_tension: usize,
+    /// Height of the crack: the median height of the broken bonds' mid-points \[m\]
+    /// (NaN before the first break).
+    pub crack_height: f64,
+    /// Broken bonds whose mid-point lies within [`CRACK_BAND`] of the crack height: the
+    /// bonds of the macro-crack.
+    pub broken_in_crack: usize,
+    /// Median sphere diameter d50 \[m\] (by number).
+    pub d50: f64,
+    /// Largest difference of the mean temperatures of two spheres whose bond broke \[K\]:
+    /// the temperature step across the crack.
+    pub temperature_step: f64,
+}
+
+/// Half-width of the band around the crack height that counts as the macro-crack \[m\]: half
+/// the largest sphere diameter of the packing (8 mm).
+pub const CRACK_BAND: f64 = 4e-3;
+
+/// The crack report of `state` (see [`CrackReport`]).
+pub fn crack_report(state: &PoreScaleState) -> CrackReport {
+    let dem = &state.dem;
+    let p = &dem.particles;
+    let mut heights: Vec<f64> = dem
+        .bond_breaks
+        .iter()
+        .map(|b| 0.5 * (p.position[b.a as usize].y + p.position[b.b as usize].y))
+        .collect();
+    heights.sort_by(f64::total_cmp);
+    let crack_height = median_sorted(&heights);
+    let broken_in_crack = heights
+        .iter()
+        .filter(|&&y| (y - crack_height).abs() <= CRACK_BAND)
+        .count();
+    let mut diameters: Vec<f64> = p.radius.iter().map(|r| 2.0 * r).collect();
+    diameters.sort_by(f64::total_cmp);
+    let temperature_step = dem
+        .bond_breaks
+        .iter()
+        .map(|b| (p.temperature[b.a as usize] - p.temperature[b.b as usize]).abs())
+        .fold(0.0, f64::max);
+    CrackReport {
+        broken_bonds: dem.bond_breaks.len(),
+        broken_in_tension: dem
+            .bond_breaks
+            .iter()
+            .filter(|b| b.mode == thm_dem::BreakMode::Tension)
+            .count(),
+        crack_height,
+        broken_in_crack,
+        d50: median_sorted(&diameters),
+        temperature_step,
+    }
+}
+
+fn median_sorted(v: &[f64]) -> f64 {
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// The largest tensile normal force carried by an intact bond in the last DEM step \[N\]
+/// (0 when no bond is in tension).
+pub fn largest_bond_tension(state: &PoreScaleState) -> f64 {
+    let c = &state.dem.contacts;
+    c.history
+        .iter()
+        .zip(&c.report)
+        .filter(|(h, _)| h.bond == thm_dem::BondState::Intact)
+        .map(|(_, r)| -r.normal_force)
+        .fold(0.0, f64::max)
 }

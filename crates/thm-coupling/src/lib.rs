@@ -81,26 +81,29 @@
 //! ## Status
 //!
 //! In place: the pore-scale step, implicit pressure and heat steps for long runs, the bar
-//! cases of A-Sects. 4, 5 and 6 case b (also as the `thm run` kind `pore_scale_bar`). Set up
-//! but not yet running to its end: A-Sect. 6 case a ([`bar::BarCase::ContractionFree`]), for
-//! two reasons found by running it. (1) Coupling lag: the fluid forces are held over Δt_C, so
-//! a sphere that a breaking bond releases keeps its full fluid force (4.6 N on a sphere
-//! against a side wall) for the whole step; with Δt_C = 0.01 s (DEM density ×100) the bar
-//! comes apart within one step (sphere speeds up to 65 m/s). Limiting each coupled step to a
-//! sphere displacement of 1 % of the smallest radius (step rejected and halved otherwise)
-//! keeps it together through the first breakages, so case a needs an adaptive Δt_C, not a
-//! fixed one ([`pore_scale::PoreScaleStepper::advance`] does this: case a then runs through
-//! its first breakages with phase masses kept to 2·10⁻¹⁵). (2) Once bonds break, the remeshed
-//! steps cool some fluid cells below the lowest boundary temperature (286.5 K against
-//! 293.15 K at 0.241 s), in the heat stage, in cells whose capacity barely changed. Not the
-//! cause: the cross-diffusion term (dropped, the undershoot stays, 289.5 K), the phase
-//! capacities (gas given the liquid's `c_p`, so that neither mixing nor condensation can
-//! change a capacity inconsistently: 286.518 K), the implicit heat step (the explicit one
-//! undershoots too, 287.2 K). Open: the heat geometry of remeshed cells next to broken
-//! bonds. Also the cost: from 0.29 s on the implicit flow rejects every sub-step of some
-//! coupled steps (1–3 s per rejected coupled step at 200 flow tries, mostly symbolic LU
-//! factorisations), and the coupled step stays near 10⁻⁴ s; case a reached 0.79 s in 7 min
-//! (10 bonds broken, 184 remeshes), so its 17 s would take hours here.
+//! cases of A-Sects. 4, 5 and 6 case b (also as the `thm run` kind `pore_scale_bar`), and
+//! A-Sect. 6 case a ([`bar::BarCase::ContractionFree`], `thm run` case `contraction_free`,
+//! `scenarios/bar_contraction_free.toml`) with its crack measures ([`bar::crack_report`]).
+//! Case a needs an adaptive coupled step: the fluid forces are held over Δt_C, so a sphere
+//! that a breaking bond releases keeps its full fluid force (4.6 N on a sphere against a side
+//! wall) for the whole step, and with a fixed Δt_C = 0.01 s (DEM density ×100) the bar comes
+//! apart within one step (sphere speeds up to 65 m/s).
+//! [`pore_scale::PoreScaleStepper::advance`] retakes a step that moves a sphere by more than
+//! a set fraction of the smallest radius at half length ([`bar::case_a_coupling_step`]).
+//! What is not yet reached is case a's cost: after the first breakages the coupled step
+//! stays near 10⁻⁴ s for long stretches and some coupled steps make the implicit flow reject
+//! every sub-step, so the 17 s take hours here (0.79 s in 7 min, 4 s in 26 min in earlier
+//! probes), not the minutes the case should take.
+//!
+//! Temperatures stay between the ends' 278.16 K and the initial 368.16 K in case a (checked
+//! by a `thm run` test through bond breakage). An earlier reading of "fluid cells cooling
+//! below the boundary temperature" compared them with the 293.16 K ends of A-Sects. 4–5;
+//! case a's ends are at 278.16 K, and the cells at 279–281 K are the thin fluid cells along
+//! the cooled ends. What did break the bound was two-phase advection: a channel carried
+//! heat with the upwind pore's mixture `c_p` while the pores' capacities changed by each
+//! phase's own mass and `c_p`, so a uniform field drifted (3·10⁻⁵ K above 368.16 K within
+//! 0.03 s of case a); a channel now advects the capacity the pores exchanged
+//! ([`pore_scale::stages::advected_specific_heat`]).
 //!
 //! The MPM×DEM scheme with the granular rod of B-Sect. 5.2.1 (also as the `thm run` kind
 //! `mpm_dem_rod`) and the model (not yet the case) of the square of B-Sect. 5.2.2; not yet
