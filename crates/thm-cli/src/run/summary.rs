@@ -22,6 +22,18 @@ pub struct SummaryRow {
     pub reference: Option<f64>,
 }
 
+impl SummaryRow {
+    /// A row of `quantity` \[`unit`\] measured `measured`, against `reference` if any.
+    pub fn new(quantity: &str, unit: &str, measured: f64, reference: Option<f64>) -> Self {
+        Self {
+            quantity: quantity.into(),
+            unit: unit.into(),
+            measured,
+            reference,
+        }
+    }
+}
+
 /// The facts about the run shown at the top of the summary.
 #[derive(Debug)]
 pub struct RunInfo<'a> {

@@ -893,6 +893,117 @@ segments = 16
         }
     }
 
+    /// Case a with weak bonds (T = 1 MPa), so that bonds break within the first steps: the
+    /// run takes adaptive coupled steps, records the breaks, keeps the phase masses, and a
+    /// resumed run ends on the same bits.
+    const CASE_A: &str = r#"
+kind = "pore_scale_bar"
+[time]
+step = "0.005 s"
+end = "0.03 s"
+[output]
+frame_every = 2
+checkpoint_every = 2
+encoding = "ascii"
+[bar]
+case = "contraction_free"
+segments = 16
+bond_tensile_strength = "1 MPa"
+[bar.coupling_step]
+max = "0.005 s"
+min = "1e-7 s"
+max_displacement = 0.01
+growth = 1.2
+"#;
+
+    #[test]
+    fn case_a_breaks_bonds_keeps_mass_and_resumes_bitwise() {
+        let dir = scratch("pore_bar_case_a");
+        let file = write_scenario(&dir, CASE_A);
+        let full = dir.join("full");
+        let Outcome::Finished { steps, .. } = run(&file, &full, None).unwrap() else {
+            panic!("not finished")
+        };
+        assert_eq!(steps, 6);
+        let history = std::fs::read_to_string(full.join("history.csv")).unwrap();
+        let mut lines = history.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let col = |name: &str| {
+            header
+                .iter()
+                .position(|h| h.starts_with(name))
+                .unwrap_or_else(|| panic!("no {name} in {header:?}"))
+        };
+        let rows: Vec<Vec<f64>> = lines
+            .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+            .collect();
+        let last = rows.last().unwrap();
+        assert!(last[col("broken_bonds")] >= 1.0, "{last:?}");
+        for name in ["liquid_mass", "gas_mass"] {
+            let (m0, m1) = (rows[0][col(name)], last[col(name)]);
+            assert!(((m1 - m0) / m0).abs() <= 1e-12, "{name}: {m0} -> {m1}");
+        }
+        // The temperature stays between the ends' 278.16 K and the initial 368.16 K.
+        for r in &rows {
+            let (lo, hi) = (r[col("min_temperature")], r[col("max_temperature")]);
+            assert!(
+                lo >= 278.16 && hi <= 368.16 + 1e-9,
+                "t = {}: T in [{lo}, {hi}]",
+                r[0]
+            );
+        }
+        let summary = std::fs::read_to_string(full.join("summary.md")).unwrap();
+        for row in [
+            "broken_bonds",
+            "d50_final",
+            "largest_bond_tension_before_breakage",
+        ] {
+            assert!(summary.contains(row), "{row}");
+        }
+        let resumed = dir.join("resumed");
+        copy_dir(&full, &resumed);
+        std::fs::remove_file(checkpoint_path(&resumed, 6)).unwrap();
+        std::fs::remove_file(resumed.join("cells/cells_00000006.vtu")).unwrap();
+        run(&file, &resumed, Some(&checkpoint_path(&resumed, 2))).unwrap();
+        assert_same_results(&full, &resumed, "cells", &[4, 6], 6);
+        assert_same_results(&full, &resumed, "spheres", &[4, 6], 6);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn case_a_fields_name_the_key() {
+        let cases = [
+            (
+                "case = \"contraction_free\"",
+                "case = \"contraction_fixed\"",
+                "bar.bond_tensile_strength: only for case = \"contraction_free\"",
+            ),
+            (
+                "segments = 16",
+                "segments = 16\ndensity_scale = 0.5",
+                "bar.density_scale: must be in 1 … 1e6, got 0.5",
+            ),
+            ("growth = 1.2", "growth = 20", "bar.coupling_step.growth"),
+            ("min = \"1e-7 s\"", "min = \"1 s\"", "bar.coupling_step.min"),
+            (
+                "bond_tensile_strength = \"1 MPa\"",
+                "bond_tensile_strength = \"-1 MPa\"",
+                "bar.bond_tensile_strength",
+            ),
+        ];
+        for (k, (from, to, expected)) in cases.iter().enumerate() {
+            assert!(CASE_A.contains(from), "{from}");
+            let err = error_of(
+                &format!("pore_bar_a_bad_{k}"),
+                &CASE_A.replacen(from, to, 1),
+            );
+            assert!(
+                err.contains(expected),
+                "case {k}: `{err}` lacks `{expected}`"
+            );
+        }
+    }
+
     #[test]
     fn sealed_water_without_tension_stops_naming_the_pore_and_keeps_its_checkpoint() {
         let dir = scratch("pore_bar_tension");

@@ -475,12 +475,7 @@ impl Scenario for DemTensionBar {
                 state.curve.iter().map(|s| (s[0], s[1])).unzip();
             rising_branch_modulus(&strain, &stress, state.peak_stress, state.strain_at_peak)
         };
-        let row = |quantity: &str, unit: &str, measured: f64, reference: Option<f64>| SummaryRow {
-            quantity: quantity.into(),
-            unit: unit.into(),
-            measured,
-            reference,
-        };
+        let row = SummaryRow::new;
         vec![
             row(
                 "tensile strength",

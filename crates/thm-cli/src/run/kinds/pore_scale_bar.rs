@@ -1,14 +1,20 @@
 //! `kind = "pore_scale_bar"`: the coupled DEM–CFD–heat bar cases of Krzaczek et al. (2023)
 //! on `thm_coupling::bar` (A-Fig. 8 packing; A-Sect. 4 cooling, A-Sect. 5 advection, A-Sect. 6
-//! case b). This adapter only reads the file, steps `thm_coupling::pore_scale` and writes
+//! cases b and a). In case a (`contraction_free`) each `[time] step` is an output interval
+//! that the coupled step covers adaptively (`thm_coupling::pore_scale::PoreScaleStepper::
+//! advance`, rule in `[bar.coupling_step]`). This adapter only reads the file, steps `thm_coupling::pore_scale` and writes
 //! what it sees; the cases themselves (boundary conditions, properties, how the missing
 //! figures are read) live in `thm_coupling::bar`, where a library user reaches them too.
 
 use serde::{Deserialize, Serialize};
 use thm_coupling::bar::{
-    BarCase, EquivalentMedium, bar_params, bar_state, centreline_cells, mean_mass_flux,
+    BarCase, CASE_A_DENSITY_SCALE, EquivalentMedium, bar_params, bar_state, case_a_coupling_step,
+    centreline_cells, crack_report, largest_bond_tension, mean_mass_flux, scale_sphere_density,
 };
-use thm_coupling::pore_scale::{CouplingError, PoreScaleParams, PoreScaleState, PoreScaleStepper};
+use thm_coupling::pore_scale::{
+    CouplingError, CouplingStepParams, CouplingStepRule, PoreScaleParams, PoreScaleState,
+    PoreScaleStepper,
+};
 use thm_coupling::verification::{WaterAir, water_air};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 
@@ -17,7 +23,7 @@ use crate::run::error::{ConfigError, RunError};
 use crate::run::profiles::Profile;
 use crate::run::scenario::{FrameSink, Scenario};
 use crate::run::summary::SummaryRow;
-use crate::run::units::{Pressure, Quantity};
+use crate::run::units::{Pressure, Quantity, Time};
 
 /// Which case of the paper.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -29,6 +35,8 @@ pub enum CaseName {
     Advection,
     /// A-Sect. 6 case b.
     ContractionFixed,
+    /// A-Sect. 6 case a.
+    ContractionFree,
 }
 
 fn default_seed() -> u64 {
@@ -43,7 +51,7 @@ fn default_segments() -> u32 {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BarParams {
-    /// `cooling`, `advection` or `contraction_fixed`.
+    /// `cooling`, `advection`, `contraction_fixed` or `contraction_free`.
     pub case: CaseName,
     /// Pressure difference bottom − top (advection only).
     #[serde(default)]
@@ -58,6 +66,49 @@ pub struct BarParams {
     /// true for the single-phase water cases; see `thm_coupling::bar`).
     #[serde(default)]
     pub liquid_tension: Option<bool>,
+    /// DEM mass scaling (case a only; default `thm_coupling::bar::CASE_A_DENSITY_SCALE`).
+    #[serde(default)]
+    pub density_scale: Option<f64>,
+    /// Bond tensile strength T (case a only; the cohesion follows at C = 5 T, A-Table 1's
+    /// ratio; default A-Table 1's 30 MPa).
+    #[serde(default)]
+    pub bond_tensile_strength: Option<Quantity<Pressure>>,
+    /// The coupled-step rule (case a only; default `thm_coupling::bar::case_a_coupling_step`).
+    #[serde(default)]
+    pub coupling_step: Option<CouplingStepSection>,
+}
+
+/// `[bar.coupling_step]`: see `thm_coupling::pore_scale::CouplingStepParams`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CouplingStepSection {
+    /// Longest coupled step.
+    pub max: Quantity<Time>,
+    /// Shortest coupled step before the run stops.
+    pub min: Quantity<Time>,
+    /// Largest sphere displacement per coupled step, as a fraction of the smallest radius.
+    pub max_displacement: f64,
+    /// Growth factor of the step after an accepted one.
+    pub growth: f64,
+}
+
+/// Cohesion over tensile strength of A-Table 1 (150 / 30 MPa), kept when T is changed.
+const COHESION_RATIO: f64 = 5.0;
+
+/// The evolving state: the coupled state and what the summary needs of the past.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct BarRun {
+    /// Spheres, mesh, fluid and heat.
+    pub coupled: PoreScaleState,
+    /// Largest tensile force of an intact bond, sampled at the end of every `[time] step`
+    /// before the first bond broke \[N\].
+    pub largest_bond_tension: f64,
+    /// Largest mean channel speed seen at the end of a `[time] step` \[m/s\].
+    pub largest_fluid_speed: f64,
+    /// d50 of the initial packing \[m\].
+    pub initial_d50: f64,
+    /// Coupled steps taken and rejected (case a) over the run.
+    pub coupled_steps: [u64; 2],
 }
 
 /// The kind's sections of the scenario file.
@@ -72,6 +123,8 @@ pub struct Params {
 pub struct PoreScaleBar {
     case: BarCase,
     params: PoreScaleParams,
+    /// The coupled-step rule of case a.
+    rule: Option<CouplingStepRule>,
     stepper: PoreScaleStepper<WaterAir>,
     /// Cells on the vertical centreline, by height.
     centre: Vec<usize>,
@@ -129,6 +182,70 @@ impl PoreScaleBar {
         centre
     }
 
+    /// The summary of case a: each figure of A-Sect. 6 against the paper's (see
+    /// `docs/cases/bar_contraction_free.md` for how each is measured and read).
+    fn case_a_summary(&self, run: &BarRun) -> Vec<SummaryRow> {
+        let state = &run.coupled;
+        let crack = crack_report(state);
+        let [t_min, t_max] = range(&state.heat.temperature);
+        let [p_min, _] = range(&state.flow.pressure);
+        let row = SummaryRow::new;
+        vec![
+            row("max_temperature", "K", t_max, Some(328.1)),
+            row("min_temperature", "K", t_min, None),
+            row("lowest_pore_pressure", "Pa", p_min, Some(0.0116e6)),
+            row("broken_bonds", "1", crack.broken_bonds as f64, Some(34.0)),
+            row(
+                "broken_in_tension",
+                "1",
+                crack.broken_in_tension as f64,
+                None,
+            ),
+            row(
+                "broken_bonds_in_macro_crack_band",
+                "1",
+                crack.broken_in_crack as f64,
+                Some(5.0),
+            ),
+            row(
+                "crack_height_over_bar_length",
+                "1",
+                crack.crack_height / thm_coupling::bar::BAR_LENGTH,
+                None,
+            ),
+            row(
+                "largest_bond_tension_before_breakage",
+                "N",
+                run.largest_bond_tension,
+                Some(29.313),
+            ),
+            row("d50_initial", "mm", run.initial_d50 * 1e3, Some(6.032)),
+            row("d50_final", "mm", crack.d50 * 1e3, Some(5.837)),
+            row(
+                "temperature_step_across_broken_bonds",
+                "K",
+                crack.temperature_step,
+                Some(20.9),
+            ),
+            row(
+                "largest_fluid_speed",
+                "m/s",
+                run.largest_fluid_speed,
+                Some(0.0057),
+            ),
+            row("liquid_mass", "kg", state.liquid_mass(), None),
+            row("gas_mass", "kg", state.gas_mass(), None),
+            row("remeshes", "1", state.remeshes as f64, None),
+            row("coupled_steps", "1", run.coupled_steps[0] as f64, None),
+            row(
+                "rejected_coupled_steps",
+                "1",
+                run.coupled_steps[1] as f64,
+                None,
+            ),
+        ]
+    }
+
     /// Temperature of the centreline cell nearest mid-height \[K\].
     fn mid_temperature(&self, state: &PoreScaleState) -> f64 {
         let mesh = &state.mesh.mesh;
@@ -169,11 +286,12 @@ fn range(v: &[f64]) -> [f64; 2] {
 impl Scenario for PoreScaleBar {
     const KIND: &'static str = "pore_scale_bar";
     // 2: the state carries each sphere's reference solid area (heat capacity of its mass).
-    const STATE_VERSION: u32 = 2;
+    // 3: the coupled state inside `BarRun` with the run's records.
+    const STATE_VERSION: u32 = 3;
     type Params = Params;
-    type State = PoreScaleState;
+    type State = BarRun;
 
-    fn init(p: &Params, _time: &TimeControl) -> Result<(Self, PoreScaleState), ConfigError> {
+    fn init(p: &Params, _time: &TimeControl) -> Result<(Self, BarRun), ConfigError> {
         let b = &p.bar;
         let case = match (b.case, &b.pressure_drop) {
             (CaseName::Advection, Some(dp)) => BarCase::Advection {
@@ -193,7 +311,24 @@ impl Scenario for PoreScaleBar {
             }
             (CaseName::Cooling, None) => BarCase::Cooling,
             (CaseName::ContractionFixed, None) => BarCase::ContractionFixed,
+            (CaseName::ContractionFree, None) => BarCase::ContractionFree,
         };
+        let free = case == BarCase::ContractionFree;
+        for (key, given) in [
+            ("bar.density_scale", b.density_scale.is_some()),
+            (
+                "bar.bond_tensile_strength",
+                b.bond_tensile_strength.is_some(),
+            ),
+            ("bar.coupling_step", b.coupling_step.is_some()),
+        ] {
+            if given && !free {
+                return Err(ConfigError::new(
+                    key,
+                    "only for case = \"contraction_free\" (the spheres of the other cases are held)",
+                ));
+            }
+        }
         if !(8..=256).contains(&b.segments) {
             return Err(ConfigError::new(
                 "bar.segments",
@@ -204,11 +339,51 @@ impl Scenario for PoreScaleBar {
         if let Some(t) = b.liquid_tension {
             params.liquid_tension = t;
         }
+        let density_scale = b.density_scale.unwrap_or(CASE_A_DENSITY_SCALE);
+        let mut rule = None;
+        if free {
+            if !(density_scale.is_finite() && (1.0..=1e6).contains(&density_scale)) {
+                return Err(ConfigError::new(
+                    "bar.density_scale",
+                    format!("must be in 1 … 1e6, got {density_scale}"),
+                ));
+            }
+            params.dem.time_step *= density_scale.sqrt();
+            if let Some(t) = &b.bond_tensile_strength {
+                let t = t.within("bar.bond_tensile_strength", 1e3, 1e10)?;
+                params.contact.tensile_strength = t;
+                params.contact.cohesion = COHESION_RATIO * t;
+            }
+            let step = match &b.coupling_step {
+                None => case_a_coupling_step(),
+                Some(c) => CouplingStepParams {
+                    max_step: c.max.positive("bar.coupling_step.max")?,
+                    min_step: c.min.positive("bar.coupling_step.min")?,
+                    max_displacement: c.max_displacement,
+                    growth: c.growth,
+                },
+            };
+            rule = Some(step.validate().map_err(|e| match e {
+                CouplingError::Parameter { field, .. } => {
+                    let key = match field {
+                        "max_step" => "max",
+                        "min_step" => "min",
+                        other => other,
+                    };
+                    ConfigError::new(format!("bar.coupling_step.{key}"), e.to_string())
+                }
+                other => ConfigError::new("bar.coupling_step", other.to_string()),
+            })?);
+        }
         let config = params
             .validate()
             .map_err(|e| ConfigError::new("bar", e.to_string()))?;
-        let state = bar_state(case, &config, b.seed, &water_air())
+        let mut state = bar_state(case, &config, b.seed, &water_air())
             .map_err(|e| ConfigError::new("bar", e.to_string()))?;
+        if free {
+            scale_sphere_density(&mut state, density_scale)
+                .map_err(|e| ConfigError::new("bar.density_scale", e.to_string()))?;
+        }
         let stepper = PoreScaleStepper::new(config, water_air(), &state)
             .map_err(|e| ConfigError::new("bar", e.to_string()))?;
         let centre = Self::sorted_centre(&state);
@@ -217,6 +392,7 @@ impl Scenario for PoreScaleBar {
             Self {
                 case,
                 params,
+                rule,
                 stepper,
                 centre,
                 equivalent,
@@ -230,11 +406,18 @@ impl Scenario for PoreScaleBar {
                 sphere_position: Vec::new(),
                 sphere_force: Vec::new(),
             },
-            state,
+            BarRun {
+                initial_d50: crack_report(&state).d50,
+                coupled: state,
+                largest_bond_tension: 0.0,
+                largest_fluid_speed: 0.0,
+                coupled_steps: [0, 0],
+            },
         ))
     }
 
-    fn restore(&mut self, state: &PoreScaleState) -> Result<(), RunError> {
+    fn restore(&mut self, run: &BarRun) -> Result<(), RunError> {
+        let state = &run.coupled;
         let config = self.params.validate().map_err(|e| RunError::Physics {
             step: state.step,
             time: state.time,
@@ -246,19 +429,43 @@ impl Scenario for PoreScaleBar {
         Ok(())
     }
 
-    fn step(&mut self, state: &mut PoreScaleState, step: u64, dt: f64) -> Result<(), RunError> {
+    fn step(&mut self, run: &mut BarRun, step: u64, dt: f64) -> Result<(), RunError> {
+        let state = &mut run.coupled;
         let time = state.time;
-        self.stepper
-            .step(state, dt)
-            .map_err(|e| physics(step, time, e))?;
-        if state.remeshes > 0 {
+        let remeshes = state.remeshes;
+        match &self.rule {
+            Some(rule) => {
+                let r = self
+                    .stepper
+                    .advance(state, dt, rule)
+                    .map_err(|e| physics(step, time, e))?;
+                run.coupled_steps[0] += r.steps;
+                run.coupled_steps[1] += r.rejected;
+            }
+            None => {
+                self.stepper
+                    .step(state, dt)
+                    .map_err(|e| physics(step, time, e))?;
+                run.coupled_steps[0] += 1;
+            }
+        }
+        if state.remeshes != remeshes {
             self.centre = Self::sorted_centre(state);
         }
+        if state.dem.bond_breaks.is_empty() {
+            run.largest_bond_tension = run.largest_bond_tension.max(largest_bond_tension(state));
+        }
+        let speed = self
+            .stepper
+            .channel_speeds(state)
+            .into_iter()
+            .fold(0.0, f64::max);
+        run.largest_fluid_speed = run.largest_fluid_speed.max(speed);
         Ok(())
     }
 
     fn monitor_columns(&self) -> Vec<Column> {
-        vec![
+        let mut columns = vec![
             Column::new("max_temperature", "K"),
             Column::new("min_temperature", "K"),
             Column::new("mid_centreline_temperature", "K"),
@@ -269,10 +476,20 @@ impl Scenario for PoreScaleBar {
             Column::new("liquid_mass", "kg"),
             Column::new("gas_mass", "kg"),
             Column::new("thermal_energy", "J"),
-        ]
+        ];
+        if self.case == BarCase::ContractionFree {
+            columns.extend([
+                Column::new("broken_bonds", "1"),
+                Column::new("largest_bond_tension_before_breakage", "N"),
+                Column::new("largest_fluid_speed", "m/s"),
+                Column::new("d50", "m"),
+            ]);
+        }
+        columns
     }
 
-    fn monitor(&self, state: &PoreScaleState, values: &mut Vec<f64>) {
+    fn monitor(&self, run: &BarRun, values: &mut Vec<f64>) {
+        let state = &run.coupled;
         let [t_min, t_max] = range(&state.heat.temperature);
         let [p_min, p_max] = range(&state.flow.pressure);
         let [r_min, r_max] = range(&state.flow.liquid_density);
@@ -288,9 +505,18 @@ impl Scenario for PoreScaleBar {
             state.gas_mass(),
             state.thermal_energy(&self.params.heat),
         ]);
+        if self.case == BarCase::ContractionFree {
+            values.extend([
+                state.dem.bond_breaks.len() as f64,
+                run.largest_bond_tension,
+                run.largest_fluid_speed,
+                crack_report(state).d50,
+            ]);
+        }
     }
 
-    fn frame(&mut self, state: &PoreScaleState, sink: &mut FrameSink<'_>) -> Result<(), IoError> {
+    fn frame(&mut self, run: &BarRun, sink: &mut FrameSink<'_>) -> Result<(), IoError> {
+        let state = &run.coupled;
         let mesh = &state.mesh.mesh;
         let n = mesh.n_cells();
         let flow = &state.flow;
@@ -396,9 +622,12 @@ impl Scenario for PoreScaleBar {
         sink("spheres", &spheres)
     }
 
-    fn summary(&self, state: &PoreScaleState, _time: f64) -> Vec<SummaryRow> {
+    fn summary(&self, run: &BarRun, _time: f64) -> Vec<SummaryRow> {
+        if self.case == BarCase::ContractionFree {
+            return self.case_a_summary(run);
+        }
         let mut values = Vec::new();
-        self.monitor(state, &mut values);
+        self.monitor(run, &mut values);
         // The paper's figures at the end of its run, where they are stated.
         let paper = |k: usize| match (self.case, k) {
             (BarCase::ContractionFixed, 0) => Some(333.3),
@@ -420,7 +649,8 @@ impl Scenario for PoreScaleBar {
             .collect()
     }
 
-    fn profiles(&self, state: &PoreScaleState, time: f64) -> Vec<Profile> {
+    fn profiles(&self, run: &BarRun, time: f64) -> Vec<Profile> {
+        let state = &run.coupled;
         let mesh = &state.mesh.mesh;
         let y: Vec<f64> = self
             .centre
