@@ -105,6 +105,13 @@
 //! 0.03 s of case a); a channel now advects the capacity the pores exchanged
 //! ([`pore_scale::stages::advected_specific_heat`]).
 //!
+//! The out-of-plane thickness (cell volume = area × thickness) is the largest diameter of the
+//! initial packing (A-Sect. 2.4) and stays for the run: a remesh used to take the largest
+//! diameter of the spheres as they were, so as case a's spheres cooled every remesh shrank
+//! every pore and every sphere's heat capacity (by 3 % over 17 s) and a sphere's mean
+//! temperature jumped at each remesh (tested: radii equal the initial radii times
+//! Π(1 + α_exp ΔT_avg) to 10⁻¹⁴ through breakage and remeshing).
+//!
 //! The MPM×DEM scheme with the granular rod of B-Sect. 5.2.1 (also as the `thm run` kind
 //! `mpm_dem_rod`) and the model (not yet the case) of the square of B-Sect. 5.2.2; not yet
 //! here: the cases of B-Sect. 5.3 and their `thm run` kinds.

@@ -539,6 +539,19 @@ pub fn remesh(
             None => return Ok(None),
         },
     };
+    // The run keeps the thickness of its first mesh (A-Sect. 2.4: the largest diameter of the
+    // packing). Re-deriving it from the spheres as they are would change every cell volume
+    // at each remesh by the change of the largest diameter (3 % over A-Sect. 6 case a as the
+    // spheres cool), so the pores' pressures and the spheres' heat capacities would jump.
+    let pinned;
+    let settings = if settings.params().thickness.is_none() {
+        let mut p = settings.params().clone();
+        p.thickness = Some(state.mesh.mesh.thickness);
+        pinned = p.validate().map_err(CouplingError::Mesh)?;
+        &pinned
+    } else {
+        settings
+    };
     let new = mesh_packing(&circles, &contacts, settings).map_err(CouplingError::Mesh)?;
     let old_mesh = &state.mesh.mesh;
     let op = RemapOperator::new(old_mesh, &new.mesh).map_err(CouplingError::Mesh)?;
