@@ -545,7 +545,7 @@ pub fn remesh(
     // spheres cool), so the pores' pressures and the spheres' heat capacities would jump.
     let pinned;
     let settings = if settings.params().thickness.is_none() {
-        let mut p = settings.params().clone();
+        let mut p = *settings.params();
         p.thickness = Some(state.mesh.mesh.thickness);
         pinned = p.validate().map_err(CouplingError::Mesh)?;
         &pinned
