@@ -13,6 +13,7 @@
 pub mod config;
 pub mod error;
 pub mod kinds;
+pub mod pictures;
 pub mod profiles;
 pub mod scenario;
 pub mod summary;

@@ -39,7 +39,10 @@ fn file_of(out: &Path, name: &str, step: u64) -> PathBuf {
     out.join(PROFILE_DIR).join(format!("{name}_{step:010}.csv"))
 }
 
-fn io_error(path: &Path, action: &'static str) -> impl FnOnce(std::io::Error) -> IoError {
+pub(crate) fn io_error(
+    path: &Path,
+    action: &'static str,
+) -> impl FnOnce(std::io::Error) -> IoError {
     let path = path.to_path_buf();
     move |source| IoError::File {
         path,
@@ -110,15 +113,25 @@ fn read_profile(path: &Path) -> Result<ProfileFile, RunError> {
 
 /// The profile files under `out`, by name, with their steps (at most `last_step`), sorted.
 fn profile_files(out: &Path, last_step: u64) -> BTreeMap<String, Vec<(u64, PathBuf)>> {
+    step_files(&out.join(PROFILE_DIR), "csv", last_step)
+}
+
+/// The files `NAME_STEP.EXT` of `dir` with `STEP <= last_step`, by name, in step order (the
+/// per-frame files of profiles and pictures; later steps are left by an interrupted run).
+pub(crate) fn step_files(
+    dir: &Path,
+    ext: &str,
+    last_step: u64,
+) -> BTreeMap<String, Vec<(u64, PathBuf)>> {
     let mut by_name: BTreeMap<String, Vec<(u64, PathBuf)>> = BTreeMap::new();
-    let Ok(entries) = std::fs::read_dir(out.join(PROFILE_DIR)) else {
+    let Ok(entries) = std::fs::read_dir(dir) else {
         return by_name;
     };
     for entry in entries.flatten() {
         let path = entry.path();
         let Some(stem) = path
             .extension()
-            .filter(|e| *e == "csv")
+            .filter(|e| *e == ext)
             .and_then(|_| path.file_stem())
             .and_then(|s| s.to_str())
         else {

@@ -70,6 +70,13 @@ pub trait Scenario: Sized {
     fn profiles(&self, _state: &Self::State, _time: f64) -> Vec<Profile> {
         Vec::new()
     }
+
+    /// Pictures of the state at `time`, `(name, picture)`, written at every frame as
+    /// `pictures/NAME_STEP.png` and shown in the summary (see [`super::pictures`]). Names
+    /// are file-name safe. Default: none.
+    fn pictures(&self, _state: &Self::State, _time: f64) -> Vec<(String, thm_io::Picture)> {
+        Vec::new()
+    }
 }
 
 /// What a checkpoint holds besides the state: enough to refuse a foreign scenario.
@@ -324,7 +331,8 @@ pub fn drive<S: Scenario>(
             };
             series[k].write_frame(step, t, grid)
         })?;
-        write_profiles(out, step, t, &scenario.profiles(state, t))
+        write_profiles(out, step, t, &scenario.profiles(state, t))?;
+        super::pictures::write_pictures(out, step, &scenario.pictures(state, t))
     };
     let save = |state: &S::State, step: u64| -> Result<PathBuf, RunError> {
         let path = checkpoint_path(out, step);

@@ -219,6 +219,7 @@ pub fn write_summary<S: Scenario>(
         let _ = writeln!(md, "![{name}]({png})\n");
     }
     super::profiles::plot_profiles(out, info.steps_done, &mut md)?;
+    super::pictures::embed_pictures(out, info.steps_done, &mut md);
     thm_io::fsutil::write_atomically(&out.join(SUMMARY_FILE), |w| {
         std::io::Write::write_all(w, md.as_bytes())
     })?;

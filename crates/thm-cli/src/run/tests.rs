@@ -960,6 +960,12 @@ growth = 1.2
         ] {
             assert!(summary.contains(row), "{row}");
         }
+        // A-Figs. 19-22: a picture per frame, shown in the summary.
+        for step in [0, 2, 4, 6] {
+            let png = format!("pictures/state_{step:010}.png");
+            assert!(full.join(&png).is_file(), "{png}");
+            assert!(summary.contains(&png), "{png} not in the summary");
+        }
         let resumed = dir.join("resumed");
         copy_dir(&full, &resumed);
         std::fs::remove_file(checkpoint_path(&resumed, 6)).unwrap();
@@ -967,7 +973,9 @@ growth = 1.2
         run(&file, &resumed, Some(&checkpoint_path(&resumed, 2))).unwrap();
         assert_same_results(&full, &resumed, "cells", &[4, 6], 6);
         assert_same_results(&full, &resumed, "spheres", &[4, 6], 6);
-        std::fs::remove_dir_all(&dir).unwrap();
+        if std::env::var_os("THM_KEEP_TEST_OUTPUT").is_none() {
+            std::fs::remove_dir_all(&dir).unwrap();
+        }
     }
 
     #[test]

@@ -276,6 +276,25 @@ fn pores_to_cells(
     }
 }
 
+/// Linear interpolation through evenly spaced colour `stops` at `x` in [0, 1] (clamped).
+fn ramp(stops: &[[u8; 3]], x: f64) -> [u8; 3] {
+    let x = if x.is_finite() {
+        x.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let n = stops.len().saturating_sub(1).max(1);
+    let k = ((x * n as f64).floor() as usize).min(n - 1);
+    let f = x * n as f64 - k as f64;
+    let (a, b) = (stops[k], stops[(k + 1).min(stops.len() - 1)]);
+    std::array::from_fn(|i| (a[i] as f64 + f * (b[i] as f64 - a[i] as f64)).round() as u8)
+}
+
+/// Solid cells by temperature: blue (cold) – pale yellow – red (hot).
+const TEMPERATURE_RAMP: [[u8; 3]; 3] = [[49, 54, 149], [255, 255, 191], [165, 0, 38]];
+/// Fluid cells by pressure: light grey (low) – purple (high).
+const PRESSURE_RAMP: [[u8; 3]; 2] = [[240, 240, 240], [63, 0, 125]];
+
 fn range(v: &[f64]) -> [f64; 2] {
     v.iter()
         .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], &x| {
@@ -647,6 +666,66 @@ impl Scenario for PoreScaleBar {
                 reference: paper(k),
             })
             .collect()
+    }
+
+    /// A-Figs. 19–22 in one picture per frame: solid cells by temperature between the ends'
+    /// and the initial temperature, fluid cells by pressure over the frame's range, broken
+    /// bonds as black segments between the sphere centres.
+    fn pictures(&self, run: &BarRun, time: f64) -> Vec<(String, thm_io::Picture)> {
+        let state = &run.coupled;
+        let mesh = &state.mesh.mesh;
+        let network = self.stepper.network();
+        let mut pore_of_cell = vec![None; mesh.n_cells()];
+        for (p, &c) in network.pore_cell().iter().enumerate() {
+            pore_of_cell[c as usize] = Some(p);
+        }
+        let [p_lo, p_hi] = range(&state.flow.pressure);
+        let (t_lo, t_hi) = (self.case.end_temperature(), self.case.initial_temperature());
+        let scale = |v: f64, lo: f64, hi: f64| if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
+        let polygons = (0..mesh.n_cells())
+            .map(|c| {
+                let fill = match pore_of_cell[c] {
+                    Some(p) => ramp(&PRESSURE_RAMP, scale(state.flow.pressure[p], p_lo, p_hi)),
+                    None => ramp(
+                        &TEMPERATURE_RAMP,
+                        scale(state.heat.temperature[c], t_lo, t_hi),
+                    ),
+                };
+                thm_io::FilledPolygon {
+                    corners: mesh.cell_vertices[c]
+                        .iter()
+                        .map(|&v| mesh.vertices[v as usize])
+                        .collect(),
+                    fill,
+                    outline: None,
+                }
+            })
+            .collect();
+        let x = &state.dem.particles.position;
+        let segments = state
+            .dem
+            .bond_breaks
+            .iter()
+            .map(|b| thm_io::Segment {
+                ends: [b.a, b.b].map(|i| [x[i as usize].x, x[i as usize].y]),
+                colour: [0, 0, 0],
+            })
+            .collect();
+        vec![(
+            "state".into(),
+            thm_io::Picture {
+                title: format!(
+                    "t = {time:.3} s, p {:.0}-{:.0} kPa, {} broken",
+                    p_lo / 1e3,
+                    p_hi / 1e3,
+                    state.dem.bond_breaks.len()
+                ),
+                width_px: 360,
+                background: [255, 255, 255],
+                polygons,
+                segments,
+            },
+        )]
     }
 
     fn profiles(&self, run: &BarRun, time: f64) -> Vec<Profile> {
