@@ -9,6 +9,7 @@
 use crate::channel::two_layer_conductances;
 use crate::error::{FlowError, Phase};
 use crate::fluid::PoreFluid;
+use crate::implicit::PressureLu;
 use crate::network::{BoundaryCondition, Network, SECOND_END};
 use crate::params::FlowConfig;
 use crate::state::FlowState;
@@ -554,6 +555,8 @@ pub struct FlowStepper {
     pub(crate) channel_mass: Vec<f64>,
     pub(crate) channel_liquid_mass: Vec<f64>,
     pub(crate) link_mass: Vec<f64>,
+    /// The implicit step's sparse LU, kept while the matrix pattern holds.
+    pub(crate) lu: PressureLu,
 }
 
 impl FlowStepper {
@@ -568,6 +571,7 @@ impl FlowStepper {
             channel_mass: Vec::new(),
             channel_liquid_mass: Vec::new(),
             link_mass: Vec::new(),
+            lu: PressureLu::default(),
         }
     }
 
