@@ -203,7 +203,17 @@ pub fn bar_params(case: BarCase, segments: u32) -> PoreScaleParams {
             segments,
         ),
         remesh: RemeshCriteriaParams::default(),
-        flow: FlowParameters::default(),
+        flow: FlowParameters {
+            // Case a: a flow step that needs more sub-steps fails, and the adaptive coupled
+            // step retakes it shorter (the skeleton then moves less within it) instead of
+            // sub-stepping a sliver pore up to 10⁵ times.
+            max_substeps: if case == BarCase::ContractionFree {
+                CASE_A_FLOW_SUBSTEPS
+            } else {
+                FlowParameters::default().max_substeps
+            },
+            ..FlowParameters::default()
+        },
         flow_scheme: FlowScheme::Implicit,
         liquid_tension: matches!(case, BarCase::Cooling | BarCase::Advection { .. }),
         flow_boundaries,
@@ -346,6 +356,10 @@ pub fn mean_mass_flux(state: &PoreScaleState) -> f64 {
 /// cooling, so the skeleton still follows the temperature quasi-statically; what it changes is
 /// how long a released sphere takes to settle after a bond breaks (10× longer).
 pub const CASE_A_DENSITY_SCALE: f64 = 100.0;
+
+/// Most flow sub-steps in one coupled step of case a: beyond them the coupled step is
+/// retaken shorter ([`case_a_coupling_step`]).
+pub const CASE_A_FLOW_SUBSTEPS: u32 = 20;
 
 /// The coupled-step rule of case a (see [`crate::pore_scale::PoreScaleStepper::advance`]):
 /// steps up to 0.01 s, none moving a sphere by more than 1 % of the smallest radius, halved
