@@ -58,6 +58,8 @@ struct NewtonScratch {
     p_star: Vec<f64>,
     /// The pressures that upwind the channels and links of the next linear solve.
     upwind: Vec<f64>,
+    /// Pore and reason of the last rejected sub-step (for the error when they run out).
+    rejected: (usize, &'static str),
 }
 
 /// The sparse LU of the linearised pressure equation, kept by the stepper between solves.
@@ -280,6 +282,9 @@ impl FlowStepper {
             defect: Vec::with_capacity(network.n_pores()),
             p_star: Vec::with_capacity(network.n_pores()),
             upwind: Vec::with_capacity(network.n_pores()),
+            // Set by every rejection; the first sub-step (all of `dt`) is accepted or
+            // rejected, so the error below always follows one.
+            rejected: (0, "no rejection"),
         };
         while remaining > 0.0 {
             h = h.min(remaining);
@@ -289,8 +294,8 @@ impl FlowStepper {
                     step: state.step,
                     substeps: report.substeps,
                     dt_limit: h,
-                    limit: "implicit sub-step rejected (positivity, closure or convergence)",
-                    pore: usize::MAX,
+                    limit: scratch.rejected.1,
+                    pore: scratch.rejected.0,
                 });
             }
             tries += 1;
@@ -380,19 +385,26 @@ impl FlowStepper {
             std::mem::swap(&mut state.pressure, &mut scratch.p_star);
             let limit = gathered?;
             let start = &scratch.start;
-            let too_much = self.rates.iter().enumerate().any(|(p, r)| {
-                (r.liquid < 0.0 && -r.liquid * h > s_pos * start.liquid_mass[p])
-                    || (r.gas < 0.0 && -r.gas * h > s_pos * start.gas_mass[p])
+            let too_much = self.rates.iter().enumerate().find_map(|(p, r)| {
+                if r.liquid < 0.0 && -r.liquid * h > s_pos * start.liquid_mass[p] {
+                    Some((p, "liquid positivity"))
+                } else if r.gas < 0.0 && -r.gas * h > s_pos * start.gas_mass[p] {
+                    Some((p, "gas positivity"))
+                } else {
+                    None
+                }
             });
-            if too_much {
+            if let Some(rejected) = too_much {
                 state.clone_from(&scratch.start);
+                scratch.rejected = rejected;
                 return Ok(None);
             }
             state.clone_from(&scratch.start);
             match advance_and_close(state, fluid, &self.rates, dv_dt, h, substep) {
                 Ok(()) => {}
-                Err(FlowError::Closure { .. }) => {
+                Err(FlowError::Closure { pore, .. }) => {
                     state.clone_from(&scratch.start);
+                    scratch.rejected = (pore, "closure");
                     return Ok(None);
                 }
                 Err(e) => return Err(e),
@@ -420,6 +432,18 @@ impl FlowStepper {
             }
             std::mem::swap(&mut scratch.upwind, &mut scratch.p_star);
         }
+        // The pore whose closure pressure is farthest from the last linear solve.
+        let worst = state
+            .pressure
+            .iter()
+            .zip(&scratch.upwind)
+            .map(|(p, q)| (p - q).abs())
+            .enumerate()
+            .fold(
+                (0, f64::NEG_INFINITY),
+                |b, (i, d)| if d > b.1 { (i, d) } else { b },
+            );
+        scratch.rejected = (worst.0, "Newton convergence");
         state.clone_from(&scratch.start);
         Ok(None)
     }

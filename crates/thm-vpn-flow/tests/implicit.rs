@@ -223,3 +223,36 @@ fn implicit_runs_on_1_and_2_threads_give_identical_bits() {
         assert!(x.iter().zip(y).all(|(u, v)| u.to_bits() == v.to_bits()));
     }
 }
+
+/// When the implicit sub-steps run out, the error names the pore and the reason of the last
+/// rejected sub-step (it named no pore). A tiny pore of gas at 5 MPa beside a large one at
+/// 1 MPa: the first sub-step of 0.1 s would take all its gas out (gas positivity); with one
+/// sub-step allowed, that ends the step.
+#[test]
+fn running_out_of_sub_steps_names_the_pore_and_the_reason() {
+    use thm_vpn_flow::{FlowConfig, FlowError, FlowParameters};
+    let net = chain(2, None);
+    let fluid = water_air();
+    let mut state = FlowState::from_pressure(
+        &net,
+        vec![1e-9, 1e-15],
+        vec![293.15; 2],
+        &[1e6, 5e6],
+        &[1.0, 0.0],
+        &fluid,
+    )
+    .unwrap();
+    let config = FlowConfig::new(FlowParameters {
+        max_substeps: 1,
+        ..FlowParameters::default()
+    })
+    .unwrap();
+    let mut stepper = FlowStepper::new(config);
+    let err = stepper
+        .implicit_step(&net, &mut state, &fluid, &[], 0.1)
+        .unwrap_err();
+    let FlowError::TooManySubsteps { pore, limit, .. } = &err else {
+        panic!("expected TooManySubsteps, got {err}")
+    };
+    assert_eq!((*pore, *limit), (1, "gas positivity"), "{err}");
+}
