@@ -90,10 +90,10 @@
 //! apart within one step (sphere speeds up to 65 m/s).
 //! [`pore_scale::PoreScaleStepper::advance`] retakes a step that moves a sphere by more than
 //! a set fraction of the smallest radius at half length ([`bar::case_a_coupling_step`]).
-//! What is not yet reached is case a's cost: after the first breakages the coupled step
-//! stays near 10⁻⁴ s for long stretches and some coupled steps make the implicit flow reject
-//! every sub-step, so the 17 s take hours here (0.79 s in 7 min, 4 s in 26 min in earlier
-//! probes), not the minutes the case should take.
+//! What is not yet reached is case a's end: after the first breakages the implicit flow
+//! fails in sliver pores (10⁻¹⁸–10⁻¹³ m³ against a median of 10⁻⁹ m³) and the coupled step
+//! shrinks; with the calibrated bonds the run stops at 0.67 s with the flow failing even in
+//! a 10⁻⁷ s coupled step (`docs/cases/bar_contraction_free.md`).
 //!
 //! Temperatures stay between the ends' 278.16 K and the initial 368.16 K in case a (checked
 //! by a `thm run` test through bond breakage). An earlier reading of "fluid cells cooling
