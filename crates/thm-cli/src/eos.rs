@@ -207,6 +207,7 @@ impl Record<'_> {
             EosError::InvalidInput { quantity, .. } => column_of(quantity),
             EosError::BelowCovolume { .. } => column_of("density"),
             EosError::NoRoot { .. } => column_of("pressure"),
+            EosError::Unrepresentable { input, .. } => column_of(input),
             EosError::OutsideModelRange { quantity, .. } => column_of(quantity),
             EosError::NoClosure { .. } | EosError::InvalidParameter { .. } => column_of("state"),
         };

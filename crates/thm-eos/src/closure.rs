@@ -459,6 +459,22 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
                 }
             }
         };
+        // Every input is finite and each phase's pressure is checked, but the combination
+        // (e.g. a fraction near an ulp of 0 against an extreme mass) could still overflow.
+        let outcome = outcome.and_then(|s| {
+            let values = [
+                s.liquid_fraction,
+                s.gas_fraction,
+                s.pressure,
+                s.liquid_density,
+                s.gas_density,
+            ];
+            if values.iter().all(|x| x.is_finite()) {
+                Ok(s)
+            } else {
+                Err("a computed fraction, density or pressure is not finite")
+            }
+        });
         outcome.map_err(|reason| EosError::NoClosure {
             temperature,
             pore_volume,
@@ -466,5 +482,30 @@ impl<L: EquationOfState, G: EquationOfState> PoreClosure for TwoPhaseClosure<L, 
             gas_mass,
             reason,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{Branch, EquationOfState, GAS_CONSTANT, Model, PoreClosure, water_air_closure};
+
+    /// The fuzz finding `eos_csv/crash-c109…`: T = 300 K, V = 1e-9 m³, no liquid and
+    /// m_gas = 1e-251 kg closed with pressure NaN (the gas's V² overflowed). It is a gas-only pore
+    /// at the ideal-gas pressure m R T/(w V), and the absent liquid's density is the liquid's at
+    /// that pressure (its P → 0 limit), not the vapour's.
+    #[test]
+    fn a_vanishing_gas_mass_is_an_ideal_gas() {
+        for model in [Model::Pr, Model::PrCorrected] {
+            let closure = water_air_closure(model);
+            let s = closure.close(300.0, 1e-9, 0.0, 1e-251).unwrap();
+            let ideal = 1e-251 / 1e-9 * GAS_CONSTANT * 300.0 / closure.gas.molar_mass();
+            assert!((s.pressure / ideal - 1.0).abs() < 1e-12, "{s:?}");
+            assert_eq!((s.liquid_fraction, s.gas_fraction), (0.0, 1.0));
+            let liquid = closure.liquid.density(300.0, 1.0, Branch::Liquid).unwrap();
+            assert!((s.liquid_density / liquid - 1.0).abs() < 1e-9, "{s:?}");
+            // With a little liquid as well, the two-phase solver reaches the same pressure scale.
+            let s = closure.close(300.0, 1e-9, 1e-15, 1e-251).unwrap();
+            assert!(s.pressure.is_finite() && s.liquid_fraction > 0.0, "{s:?}");
+        }
     }
 }

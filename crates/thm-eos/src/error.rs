@@ -69,6 +69,26 @@ pub enum EosError {
         /// The model's range in words.
         allowed: &'static str,
     },
+    /// A computed quantity is not finite (or a density underflowed to zero) although every
+    /// input passed its checks: the state lies where the equation cannot be evaluated in double
+    /// precision (subnormal or astronomically large temperatures, densities or pressures).
+    #[error(
+        "{quantity} = {value} at T = {temperature} K, {input} = {input_value} is not \
+         representable in double precision (the state is outside the range the equation can be \
+         evaluated in)"
+    )]
+    Unrepresentable {
+        /// Name of the computed quantity, e.g. `"pressure"`.
+        quantity: &'static str,
+        /// The value computed (infinite, NaN, or zero for an underflowed density).
+        value: f64,
+        /// Temperature (K).
+        temperature: f64,
+        /// The other input's name, e.g. `"density"`.
+        input: &'static str,
+        /// Its value.
+        input_value: f64,
+    },
     /// The two-phase pore closure has no state with equal phase pressures on the mechanically
     /// stable branches (∂P/∂ρ > 0) of both phases.
     #[error(

@@ -60,6 +60,13 @@
 //! above `w/(b + s)`) are [`EosError::BelowCovolume`]; non-positive or non-finite inputs are
 //! [`EosError::InvalidInput`].
 //!
+//! Extreme but finite inputs: a very dilute state (`V` ≥ 1e30 m³/kmol, down to subnormal
+//! densities) is evaluated in `1/V`, so a trace of gas has its finite ideal-gas pressure instead
+//! of `∞ − ∞`; below 1e-100 Pa the densities are their `P → 0` limits (the cubic's coefficients
+//! underflow there); a result that still cannot be represented in double precision (an
+//! overflow, or a density below the smallest double) is [`EosError::Unrepresentable`], never a
+//! NaN or an infinity.
+//!
 //! ## The closure
 //!
 //! [`TwoPhaseClosure`] solves A-Eq. 29 by a safeguarded Newton iteration on the pressure

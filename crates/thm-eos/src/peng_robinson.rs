@@ -107,6 +107,42 @@ pub struct PengRobinson {
     inv_critical_temperature: f64,
 }
 
+/// Molar volume (m³/kmol) above which A-Eq. 16 is evaluated in the inverse molar volume
+/// `u = 1/V` ([`PengRobinson::dilute`]): the form in `V` squares and cubes it (`V⁶` in ∂P/∂V)
+/// and divides by `ρ²`, which overflow or underflow for very dilute states (`V` ≳ 1e51, or
+/// `ρ` subnormal, where `w/ρ` itself is infinite). Below it the `V` form is used, bit for bit as
+/// before; at it both agree to round-off (`b/V` < 1e-31).
+const DILUTE_MOLAR_VOLUME: f64 = 1e30;
+
+/// Pressure (Pa) below which [`PengRobinson::density`] does not solve the cubic in `Z`: its
+/// coefficients `AB`, `B²`, `B³` scale as `P²` and lose their digits to underflow below about
+/// 1e-144 Pa (the liquid root then comes out as the vapour's). Below this pressure a root differs
+/// from its `P → 0` limit by a relative `P/K` < 1e-100 (`K` the bulk modulus), far below round-off,
+/// so the limits are used ([`PengRobinson::low_pressure_density`]).
+const LOW_PRESSURE: f64 = 1e-100;
+
+/// `value` if finite, else [`EosError::Unrepresentable`] naming it and the state.
+#[inline]
+fn representable(
+    quantity: &'static str,
+    value: f64,
+    temperature: f64,
+    input: &'static str,
+    input_value: f64,
+) -> Result<f64, EosError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(EosError::Unrepresentable {
+            quantity,
+            value,
+            temperature,
+            input,
+            input_value,
+        })
+    }
+}
+
 /// Checks that `value` is finite and satisfies `ok`, else an `InvalidParameter` error.
 fn parameter(
     parameter: &'static str,
@@ -298,6 +334,25 @@ impl PengRobinson {
         self.params.molar_mass / (self.covolume + self.params.volume_shift)
     }
 
+    /// A-Eq. 16 in the inverse molar volume `u = 1/V = ρ/(w − sρ)` for a dilute state
+    /// (`V` ≥ [`DILUTE_MOLAR_VOLUME`]): `P = u [RT/(1 − x) − a u/q]` with `x = bu`,
+    /// `q = 1 + 2x − x²`, and `∂P/∂ρ = [RT/(1 − x)² − 2au(1 + x)/q²] · w/(w − sρ)²`. Nothing
+    /// here squares a large number, so the pressure of a trace of gas is its (tiny) finite value,
+    /// `≈ ρRT/w`, not `∞ − ∞`. Returns (P, ∂P/∂ρ).
+    #[inline]
+    fn dilute(&self, temperature: f64, density: f64) -> (f64, f64) {
+        let w_eff = self.params.molar_mass - self.params.volume_shift * density;
+        let u = density / w_eff;
+        let x = self.covolume * u;
+        let q = 1.0 + 2.0 * x - x * x;
+        let rt = GAS_CONSTANT * temperature;
+        let a = self.attraction(temperature);
+        let p = u * (rt / (1.0 - x) - a * u / q);
+        let dp_du = rt / ((1.0 - x) * (1.0 - x)) - 2.0 * a * u * (1.0 + x) / (q * q);
+        let du_drho = self.params.molar_mass / w_eff / w_eff;
+        (p, dp_du * du_drho)
+    }
+
     /// Pressure from A-Eq. 16 at molar volume `V > b` (not checked) (Pa).
     #[inline]
     pub fn pressure_at_molar_volume(&self, temperature: f64, molar_volume: f64) -> f64 {
@@ -361,6 +416,32 @@ impl PengRobinson {
         (out, k)
     }
 
+    /// Density at a pressure below [`LOW_PRESSURE`], exact to round-off: the liquid root is the
+    /// smaller root of A-Eq. 16 at `P = 0`, `V² − (k − 2b)V + b(k − b) = 0` with `k = a/(RT)`
+    /// (where the isotherm dips below zero; elsewhere there is no dense root and both branches
+    /// take the gas), and the gas is the ideal gas `V = RT/P` (`Z − 1 = O(P)`), computed as
+    /// `ρ = wP/(RT + sP)` so that a huge `V` never appears.
+    fn low_pressure_density(&self, temperature: f64, pressure: f64, branch: Branch) -> f64 {
+        let rt = GAS_CONSTANT * temperature;
+        let (w, s, b) = (
+            self.params.molar_mass,
+            self.params.volume_shift,
+            self.covolume,
+        );
+        if branch == Branch::Liquid {
+            let k = self.attraction(temperature) / rt;
+            let disc = k * k - 8.0 * k * b + 8.0 * b * b;
+            if k > 2.0 * b && disc >= 0.0 {
+                // Product of the roots b(k − b) over the larger root: no cancellation.
+                let v = 2.0 * b * (k - b) / ((k - 2.0 * b) + disc.sqrt());
+                if v > b && v < BRANCH_SPLIT * b {
+                    return w / (v + s);
+                }
+            }
+        }
+        w * pressure / (rt + s * pressure)
+    }
+
     /// Density on the requested branch at (T, P > 0), unchecked inputs.
     ///
     /// Same roots as [`Self::molar_volume_roots`], but only the wanted one is computed and
@@ -372,6 +453,9 @@ impl PengRobinson {
         pressure: f64,
         branch: Branch,
     ) -> Result<f64, EosError> {
+        if pressure < LOW_PRESSURE {
+            return Ok(self.low_pressure_density(temperature, pressure, branch));
+        }
         let rt = GAS_CONSTANT * temperature;
         let big_a = self.attraction(temperature) * pressure / (rt * rt);
         let big_b = self.covolume * pressure / rt;
@@ -394,7 +478,16 @@ impl PengRobinson {
                 // p(B) < 0 puts B left of the smallest root or between the middle and the
                 // largest; left of the local maximum it is the former (three roots above B),
                 // right of it only the largest root lies above B.
-                let local_max = (-a2 - (a2 * a2 - 3.0 * a1).max(0.0).sqrt()) / 3.0;
+                // The smaller root of p' = 3Z² + 2a2 Z + a1. At low pressure it is of the order
+                // of B while −a2 ≈ 1: `(−a2 − s)/3` would cancel to 0 (and send the liquid to
+                // the gas root below about 0.1 Pa for water at 300 K), so it is taken as the
+                // product of the roots, a1/3, over the larger one.
+                let s = (a2 * a2 - 3.0 * a1).max(0.0).sqrt();
+                let local_max = if -a2 + s > 0.0 {
+                    a1 / (-a2 + s)
+                } else {
+                    (-a2 - s) / 3.0
+                };
                 if big_b < local_max {
                     branch
                 } else {
@@ -404,27 +497,47 @@ impl PengRobinson {
         };
         // Fast path: Newton from a bound on that side, monotone where the cubic keeps its
         // curvature; the closed form otherwise.
-        let z = monotone_newton(a2, a1, a0, big_b, side).or_else(|| match depressed {
-            Depressed::One(t) => Some(polish_cubic_root(a2, a1, a0, t - a2 / 3.0)),
-            Depressed::Three { r, phi } => {
-                let shift = a2 / 3.0;
-                let root = |offset: f64| {
-                    polish_cubic_root(a2, a1, a0, 2.0 * r * (phi + offset).cos() - shift)
-                };
-                match branch {
-                    // Smallest, then middle, then largest: the first above B.
-                    Branch::Liquid => [TWO_PI_3, -TWO_PI_3, 0.0]
-                        .into_iter()
-                        .map(root)
-                        .find(|&z| z > big_b),
-                    Branch::Gas => Some(root(0.0)),
-                }
+        // Between about 1e-10 and 1 Pa (water at 300 K) the liquid and middle roots are too
+        // close to each other, against the closed form's shift −a2/3 ≈ 1/3, for `depressed` to
+        // resolve: it sees one root where there are three. Newton from B on the liquid side finds
+        // the smallest root if one lies left of the inflection and returns `None` otherwise (the
+        // cubic is negative there), so the liquid is tried that way first; with a single root
+        // right of the inflection both branches still take the gas path, bit for bit.
+        let liquid_first = match (branch, side, depressed) {
+            (Branch::Liquid, Branch::Gas, Depressed::One(_)) => {
+                monotone_newton(a2, a1, a0, big_b, Branch::Liquid)
             }
-        });
+            _ => None,
+        };
+        let z = liquid_first
+            .or_else(|| monotone_newton(a2, a1, a0, big_b, side))
+            .or_else(|| match depressed {
+                Depressed::One(t) => Some(polish_cubic_root(a2, a1, a0, t - a2 / 3.0)),
+                Depressed::Three { r, phi } => {
+                    let shift = a2 / 3.0;
+                    let root = |offset: f64| {
+                        polish_cubic_root(a2, a1, a0, 2.0 * r * (phi + offset).cos() - shift)
+                    };
+                    match branch {
+                        // Smallest, then middle, then largest: the first above B.
+                        Branch::Liquid => [TWO_PI_3, -TWO_PI_3, 0.0]
+                            .into_iter()
+                            .map(root)
+                            .find(|&z| z > big_b),
+                        Branch::Gas => Some(root(0.0)),
+                    }
+                }
+            });
         match z {
             Some(z) if z > big_b => {
                 let v = z * rt / pressure;
-                Ok(self.params.molar_mass / (v + self.params.volume_shift))
+                Ok(if v.is_finite() {
+                    self.params.molar_mass / (v + self.params.volume_shift)
+                } else {
+                    // V = ZRT/P overflowed (P tiny against T): ρ = wP/(ZRT + sP).
+                    self.params.molar_mass * pressure
+                        / (z * rt + self.params.volume_shift * pressure)
+                })
             }
             _ => Err(EosError::NoRoot {
                 temperature,
@@ -566,14 +679,33 @@ impl EquationOfState for PengRobinson {
     #[inline]
     fn pressure(&self, temperature: f64, density: f64) -> Result<f64, EosError> {
         let t = check_temperature(temperature)?;
-        let v = self.molar_volume(check_density(density)?)?;
-        Ok(self.pressure_at_molar_volume(t, v))
+        let rho = check_density(density)?;
+        let v = self.molar_volume(rho)?;
+        let p = if v < DILUTE_MOLAR_VOLUME {
+            self.pressure_at_molar_volume(t, v)
+        } else {
+            self.dilute(t, rho).0
+        };
+        representable("pressure", p, t, "density", rho)
     }
 
     fn density(&self, temperature: f64, pressure: f64, branch: Branch) -> Result<f64, EosError> {
         let t = check_temperature(temperature)?;
         let p = check_pressure(pressure)?;
-        self.density_unchecked(t, p, branch)
+        let rho = self.density_unchecked(t, p, branch)?;
+        // A density that overflowed, or underflowed to zero (a gas at a pressure so low, or a
+        // temperature so high, that ρ = Pw/(ZRT) is below the smallest double), is no state.
+        if rho > 0.0 {
+            representable("density", rho, t, "pressure", p)
+        } else {
+            Err(EosError::Unrepresentable {
+                quantity: "density",
+                value: rho,
+                temperature: t,
+                input: "pressure",
+                input_value: p,
+            })
+        }
     }
 
     #[inline]
@@ -586,17 +718,34 @@ impl EquationOfState for PengRobinson {
         let t = check_temperature(temperature)?;
         let rho = check_density(density)?;
         let v = self.molar_volume(rho)?;
-        let (p, dp_dv) = self.pressure_and_dp_dv(t, v);
-        // dV/dρ = −w/ρ² (A-Eq. 28 with constant s).
-        Ok((p, -dp_dv * self.params.molar_mass / (rho * rho)))
+        let (p, dp_drho) = if v < DILUTE_MOLAR_VOLUME {
+            let (p, dp_dv) = self.pressure_and_dp_dv(t, v);
+            // dV/dρ = −w/ρ² (A-Eq. 28 with constant s).
+            (p, -dp_dv * self.params.molar_mass / (rho * rho))
+        } else {
+            self.dilute(t, rho)
+        };
+        Ok((
+            representable("pressure", p, t, "density", rho)?,
+            representable("dP/drho", dp_drho, t, "density", rho)?,
+        ))
     }
 
     fn dp_dt(&self, temperature: f64, density: f64) -> Result<f64, EosError> {
         let t = check_temperature(temperature)?;
-        let v = self.molar_volume(check_density(density)?)?;
+        let rho = check_density(density)?;
+        let v = self.molar_volume(rho)?;
         let b = self.covolume;
         let (_, da_dt) = self.attraction_and_derivative(t);
-        Ok(GAS_CONSTANT / (v - b) - da_dt / (v * (v + 2.0 * b) - b * b))
+        let dp_dt = if v < DILUTE_MOLAR_VOLUME {
+            GAS_CONSTANT / (v - b) - da_dt / (v * (v + 2.0 * b) - b * b)
+        } else {
+            // In u = 1/V, as in `dilute`: R u/(1 − x) − (da/dT) u²/q.
+            let u = rho / (self.params.molar_mass - self.params.volume_shift * rho);
+            let x = b * u;
+            GAS_CONSTANT * u / (1.0 - x) - da_dt * u * u / (1.0 + 2.0 * x - x * x)
+        };
+        representable("dP/dT", dp_dt, t, "density", rho)
     }
 
     #[inline]
@@ -693,5 +842,115 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    /// The fuzz finding `eos_state/crash-23dd…`: T = 4.1e-314 K, ρ = 5.2e-315 kg/m³ (both
+    /// subnormal). `w/ρ` is infinite there and the form in V gave ∞ − ∞ = NaN; the dilute form
+    /// gives the pressure, which underflows to a signed zero, and finite derivatives.
+    #[test]
+    fn subnormal_state_is_finite_not_nan() {
+        let t = f64::from_le_bytes([0xcd, 0x83, 0x0d, 0xf4, 0x01, 0, 0, 0]);
+        let rho = f64::from_le_bytes([0xf5, 0x21, 0x94, 0x3e, 0, 0, 0, 0]);
+        assert!(t > 0.0 && !t.is_normal() && rho > 0.0 && !rho.is_normal());
+        for eos in [
+            PengRobinson::water(Model::Pr),
+            PengRobinson::water(Model::PrCorrected),
+            PengRobinson::air(),
+        ] {
+            let p = eos.pressure(t, rho).unwrap();
+            assert!(p.is_finite() && p.abs() < 1e-300, "{p}");
+            let (p2, dp) = eos.pressure_and_dp_drho(t, rho).unwrap();
+            assert_eq!(p.to_bits(), p2.to_bits());
+            assert!(dp.is_finite());
+            assert!(eos.dp_dt(t, rho).unwrap().is_finite());
+        }
+    }
+
+    /// A trace of gas: A-Eq. 16 in 1/V is the ideal gas to round-off, and it meets the form in
+    /// V at the switch.
+    #[test]
+    fn dilute_pressure_is_the_ideal_gas_and_continuous() {
+        let air = PengRobinson::air();
+        let w = air.molar_mass();
+        for rho in [1e-30, 1e-100, 1e-242, 1e-310] {
+            let p = air.pressure(300.0, rho).unwrap();
+            let ideal = rho * GAS_CONSTANT * 300.0 / w;
+            assert!((p / ideal - 1.0).abs() < 1e-12, "ρ = {rho}: {p} vs {ideal}");
+            let dp = air.dp_drho(300.0, rho).unwrap();
+            assert!(
+                (dp / (GAS_CONSTANT * 300.0 / w) - 1.0).abs() < 1e-12,
+                "{dp}"
+            );
+        }
+        // Either side of V = DILUTE_MOLAR_VOLUME.
+        for eos in [PengRobinson::water(Model::PrCorrected), air] {
+            let rho_switch = eos.molar_mass() / (DILUTE_MOLAR_VOLUME + eos.volume_shift());
+            let below = eos.pressure(650.0, rho_switch * (1.0 + 1e-9)).unwrap();
+            let above = eos.pressure(650.0, rho_switch * (1.0 - 1e-9)).unwrap();
+            assert!((below / above - 1.0).abs() < 3e-9, "{below} vs {above}");
+            let dt_below = eos.dp_dt(650.0, rho_switch * (1.0 + 1e-9)).unwrap();
+            let dt_above = eos.dp_dt(650.0, rho_switch * (1.0 - 1e-9)).unwrap();
+            assert!((dt_below / dt_above - 1.0).abs() < 3e-9);
+        }
+    }
+
+    /// What cannot be represented is a typed error naming the quantity, not NaN or ∞.
+    #[test]
+    fn overflow_is_a_typed_error() {
+        let water = PengRobinson::water(Model::PrCorrected);
+        match water.pressure(f64::MAX, 1.0) {
+            Err(EosError::Unrepresentable {
+                quantity: "pressure",
+                input: "density",
+                value,
+                ..
+            }) => assert!(!value.is_finite()),
+            other => panic!("{other:?}"),
+        }
+        // ρ = Pw/(RT) below the smallest double.
+        match PengRobinson::air().density(1e300, 1e-300, Branch::Gas) {
+            Err(EosError::Unrepresentable {
+                quantity: "density",
+                input: "pressure",
+                value,
+                ..
+            }) => assert_eq!(value, 0.0),
+            other => panic!("{other:?}"),
+        }
+        let e = water.pressure(f64::MAX, 1.0).unwrap_err().to_string();
+        assert!(e.contains("pressure") && e.contains("density = 1"), "{e}");
+    }
+
+    /// The liquid root at low pressure: it tends to its P → 0 limit (the smaller root of the
+    /// quadratic at P = 0), instead of jumping to the vapour's root below about 0.1 Pa.
+    #[test]
+    fn liquid_at_low_pressure_stays_liquid() {
+        for model in [Model::Pr, Model::PrCorrected] {
+            let water = PengRobinson::water(model);
+            let at_10_pa = water.density(300.0, 10.0, Branch::Liquid).unwrap();
+            for e in -300..=0 {
+                let p = 10f64.powi(e);
+                let rho = water.density(300.0, p, Branch::Liquid).unwrap();
+                assert!(
+                    (rho / at_10_pa - 1.0).abs() < 1e-8,
+                    "{model:?}, P = {p}: ρ = {rho}, {at_10_pa} at 10 Pa"
+                );
+                assert!(water.on_branch(300.0, rho, Branch::Liquid).unwrap());
+                let gas = water.density(300.0, p, Branch::Gas).unwrap();
+                let ideal = p * water.molar_mass() / (GAS_CONSTANT * 300.0);
+                assert!((gas / ideal - 1.0).abs() < 1e-6, "P = {p}: gas {gas}");
+            }
+            // Continuous across LOW_PRESSURE.
+            let below = water.density(300.0, LOW_PRESSURE * 0.999, Branch::Liquid);
+            let above = water.density(300.0, LOW_PRESSURE * 1.001, Branch::Liquid);
+            assert!((below.unwrap() / above.unwrap() - 1.0).abs() < 1e-14);
+        }
+        // Above the temperature where the isotherm stays positive there is no dense root at
+        // P → 0: both branches give the gas.
+        let air = PengRobinson::air();
+        assert_eq!(
+            air.density(300.0, 1e-200, Branch::Liquid),
+            air.density(300.0, 1e-200, Branch::Gas)
+        );
     }
 }
