@@ -353,8 +353,11 @@ pub fn mesher(data: &[u8]) {
             );
         }
     }
-    // Vertices closer than the snap tolerance × mean radius are merged (and put on a box side
-    // when that close to it): a solid vertex may lie that far outside its circle.
+    // Vertices closer than the snap tolerance × the radius of their smallest circle (at most
+    // the mean radius, at least 8 ulps of the coordinates) are merged, and put on a box side
+    // when that close to it: a solid vertex may lie that far outside its circle. The bound
+    // stays absolute (the mean radius): what a circle many decades below the mean may not do
+    // is lose its shape to merges at the mean's scale, as `mesher/crash-147f…` did.
     let mean_radius = circles.iter().map(|c| c.radius).sum::<f64>() / circles.len().max(1) as f64;
     let snap = 2.0 * settings.params().snap_tolerance * mean_radius;
     for (i, circle) in pm.circles.iter().enumerate() {
@@ -363,8 +366,9 @@ pub fn mesher(data: &[u8]) {
                 let p = m.vertices[v as usize];
                 let d =
                     ((p[0] - circle.centre[0]).powi(2) + (p[1] - circle.centre[1]).powi(2)).sqrt();
+                let round_off = 16.0 * f64::EPSILON * p[0].abs().max(p[1].abs());
                 assert!(
-                    d <= circle.radius * (1.0 + 1e-9) + snap,
+                    d <= circle.radius * (1.0 + 1e-9) + snap + round_off,
                     "solid cell {cell} of circle {i} has a vertex {d} from its centre, radius {}",
                     circle.radius
                 );

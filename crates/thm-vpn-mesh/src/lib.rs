@@ -45,8 +45,11 @@
 //!    replaced by the grid points between the chord ends (grid points closer than a quarter
 //!    step to a chord end are skipped). Shared vertices (chord ends, radical centres, crossings
 //!    of the box) are computed once from a canonical key, so neighbouring polygons share them
-//!    bit for bit; vertices closer than `snap_tolerance × mean radius` are merged (tangent
-//!    circles) and put exactly on a box side when that close to it.
+//!    bit for bit; vertices closer than `snap_tolerance × r` are merged (tangent circles) and
+//!    put exactly on a box side when that close to it, `r` being the radius of the smallest
+//!    circle they belong to, at most the mean radius (so a circle many decades smaller than the
+//!    others keeps its own grid points apart), and the distance at least 8 ulps of the
+//!    coordinates.
 //! 3. **Triangulation.** A constrained Delaunay triangulation (`spade`, bulk loaded) of all
 //!    polygon vertices, with every polygon edge and the box sides as constraints; the centre of
 //!    each circle whose polygon keeps it at least `r/4` from every edge is added as a Steiner

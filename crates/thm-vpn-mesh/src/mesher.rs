@@ -126,8 +126,9 @@ pub struct MeshParams {
     pub t2t_reduction_factor: f64,
     /// S2S aperture law A-Eq. 8.
     pub s2s: S2sApertureParams,
-    /// Vertices closer than `snap_tolerance × (mean radius)` are merged, and
-    /// vertices that close to a box side are put on it [-] (default 1e-6).
+    /// Vertices closer than `snap_tolerance × r` are merged, and vertices that close to a box
+    /// side are put on it, `r` being the radius of the smallest circle the vertices belong to,
+    /// at most the mean radius [-] (default 1e-6).
     pub snap_tolerance: f64,
 }
 
@@ -988,12 +989,13 @@ pub fn locality_order(tris: &[[u32; 3]], points: &[[f64; 2]]) -> Vec<u32> {
     keyed.into_iter().map(|(_, i)| i).collect()
 }
 
-/// Stage 4: merges vertices closer than `tol` (sort-and-sweep). Returns for every vertex its
-/// representative (the lowest index of its cluster).
-fn snap_vertices(points: &[[f64; 2]], tol: f64) -> Vec<u32> {
+/// Stage 4: merges vertices `a`, `b` closer than `min(tol[a], tol[b])` in each coordinate
+/// (sort-and-sweep). Returns for every vertex its representative (the lowest index of its
+/// cluster). No merging at all where every tolerance is zero.
+fn snap_vertices(points: &[[f64; 2]], tol: &[f64]) -> Vec<u32> {
     let n = points.len();
     let mut rep: Vec<u32> = (0..n as u32).collect();
-    if tol <= 0.0 || n < 2 {
+    if tol.iter().all(|&t| t <= 0.0) || n < 2 {
         return rep;
     }
     let mut order: Vec<u32> = (0..n as u32).collect();
@@ -1010,10 +1012,13 @@ fn snap_vertices(points: &[[f64; 2]], tol: f64) -> Vec<u32> {
         let a = order[s] as usize;
         for &bb in &order[s + 1..] {
             let b = bb as usize;
-            if points[b][0] - points[a][0] > tol {
+            let dx = points[b][0] - points[a][0];
+            // Sorted by x: no later b is within tol[a] ≥ min(tol[a], tol[b]) either.
+            if dx > tol[a] {
                 break;
             }
-            if (points[b][1] - points[a][1]).abs() <= tol {
+            let t = tol[a].min(tol[b]);
+            if dx <= t && (points[b][1] - points[a][1]).abs() <= t {
                 let (ra, rb) = (find(&mut rep, a as u32), find(&mut rep, b as u32));
                 if ra != rb {
                     let (lo, hi) = (ra.min(rb), ra.max(rb));
@@ -1027,6 +1032,16 @@ fn snap_vertices(points: &[[f64; 2]], tol: f64) -> Vec<u32> {
         rep[v as usize] = r;
     }
     rep
+}
+
+/// The snap distance of a point at `p` scaled by `radius`: `tolerance × radius`, but at least
+/// 8 ulps of the point's largest coordinate (0 when `tolerance` is 0: no snapping).
+fn snap_distance(tolerance: f64, radius: f64, p: [f64; 2]) -> f64 {
+    if tolerance > 0.0 {
+        (tolerance * radius).max(8.0 * f64::EPSILON * p[0].abs().max(p[1].abs()))
+    } else {
+        0.0
+    }
 }
 
 fn circumradius(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
@@ -1228,8 +1243,26 @@ pub fn mesh_packing(
     } else {
         1.0
     };
-    let snap = prm.snap_tolerance * mean_r;
-    for p in points.iter_mut() {
+    // Snap distance of each point: snap_tolerance × the radius of the smallest circle it belongs
+    // to, at most the mean radius (corners: the mean radius). Scaled by the mean radius alone, a
+    // circle many decades smaller than the others had its own grid points (2πr/n apart) within
+    // the snap distance, and the merges, chained, moved its solid vertices by nearly its
+    // radius. Never below the round-off of the coordinates, so tangent points still meet.
+    let radius = |i: u32| circles[i as usize].radius;
+    let snap: Vec<f64> = points
+        .iter()
+        .zip(&keys)
+        .map(|(p, k)| {
+            let r = match *k {
+                VKey::Arc(i, _) | VKey::Centre(i) | VKey::CircleSide(i, _, _) => radius(i),
+                VKey::CircleCircle(a, b, _) | VKey::PairSide(a, b, _) => radius(a).min(radius(b)),
+                VKey::Radical(a, b, c) => radius(a).min(radius(b)).min(radius(c)),
+                VKey::Corner(..) | VKey::Unique(_) => mean_r,
+            };
+            snap_distance(prm.snap_tolerance, r.min(mean_r), *p)
+        })
+        .collect();
+    for (p, &snap) in points.iter_mut().zip(&snap) {
         for x in p.iter_mut() {
             if x.abs() < 1e-40 {
                 *x = 0.0;
@@ -1247,7 +1280,7 @@ pub fn mesh_packing(
     }
 
     // Stage 4: snapping.
-    let rep = snap_vertices(&points, prm.snap_tolerance * mean_r);
+    let rep = snap_vertices(&points, &snap);
     let mut new_id = vec![NONE; points.len()];
     let mut vpos: Vec<[f64; 2]> = Vec::new();
     // Keys of each merged vertex: the first one, plus the rare extra ones of merged points.

@@ -181,3 +181,58 @@ fn single_circle_alpha_shape_is_all_solid() {
     assert_eq!(pm.mesh.fluid_area(), 0.0);
     assert_eq!(pm.mesh.channels.len(), 0);
 }
+
+/// The fuzz finding `mesher/crash-147f…`: a row of tangent circles of radius 8.2e-9 m among
+/// circles up to 4.7e-2 m (mean radius 3.1e-3 m), 16 grid points per circle. Snapping by
+/// `snap_tolerance × mean radius` (3.1e-9 m, about the grid step 2πr/16 = 3.2e-9 m of the small
+/// circles) merged their grid points in chains and left a solid vertex 1.5e-8 m from its
+/// centre; scaled by each vertex's own circle, no solid vertex leaves its circle by more than
+/// `snap_tolerance × r`.
+#[test]
+fn radii_many_decades_below_the_mean_keep_their_shape() {
+    let tiny = (1.0 + 230.0 / 32.0) * 10f64.powf(-9.0);
+    let (x0, y0) = (15490.0 / 16384.0, 253.0 / 16384.0);
+    let mut cs = Vec::new();
+    for k in [0.0, 1.0, 2.0, 2.0, 2.0, 2.0, 2.0, 2.0, 2.0, 2.0, 3.0, 3.0] {
+        cs.push(c(x0 + k * 2.0 * tiny, y0, tiny));
+    }
+    let big = (1.0 + 118.0 / 32.0) * 10f64.powf(-2.0);
+    cs.extend([c(-0.498046875, 1.8602294921875, big); 2]);
+    let mid = (1.0 + 51.0 / 32.0) * 10f64.powf(-4.0);
+    cs.extend([c(0.180908203125, -0.7352294921875, mid); 18]);
+    for (k, circle) in cs.iter_mut().enumerate() {
+        circle.owner = k as u32;
+    }
+    let s = MeshParams::new(
+        Outline::Box {
+            min: [0.0, 0.0],
+            max: [1.0, 1.0],
+        },
+        16,
+    )
+    .validate()
+    .unwrap();
+    let pm = mesh_packing(&cs, &[], &s).unwrap();
+    assert_valid(&pm);
+    let m = &pm.mesh;
+    let mut solid_cells = 0;
+    for (i, circle) in pm.circles.iter().enumerate() {
+        for &cell in pm.cells_of_circle(i) {
+            solid_cells += 1;
+            for v in m.cell_vertices[cell as usize] {
+                let p = m.vertices[v as usize];
+                let d = (p[0] - circle.centre[0]).hypot(p[1] - circle.centre[1]);
+                assert!(
+                    d <= circle.radius * (1.0 + 1e-6),
+                    "circle {i}: a solid vertex {d} m from the centre, radius {}",
+                    circle.radius
+                );
+            }
+        }
+    }
+    // The small circles are meshed, not snapped away.
+    assert!(
+        pm.cells_of_circle(0).len() >= 8,
+        "{solid_cells} solid cells"
+    );
+}
