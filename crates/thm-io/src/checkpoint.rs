@@ -121,20 +121,51 @@ struct VersionProbe {
     format_version: u32,
 }
 
-/// Largest binary payload decoded \[bytes\]: a length field claiming more is an error before
-/// anything is allocated (a corrupt length once asked for a capacity beyond `isize::MAX`).
-const DECODE_LIMIT: usize = 1 << 40;
+/// The most a valid binary payload can claim while it is decoded, per payload byte. bincode
+/// counts against its limit the in-memory size of every primitive it reads (at most 16 bytes,
+/// a `u128`, from at least one encoded byte) and the length of every string or byte buffer
+/// (one encoded byte each), before allocating; so a valid state claims at most 16 × its payload,
+/// and a length field claiming more is an error before anything is allocated. (A fixed 1 TiB
+/// limit let a corrupt string length ask for 494 GB, and the failed allocation aborted the
+/// process: `fuzz/regressions/checkpoint/crash-f860…`.)
+const CLAIM_PER_PAYLOAD_BYTE: usize = 16;
 
 fn bincode_config() -> bincode::config::Configuration {
     bincode::config::standard()
 }
 
-fn bincode_decode_config() -> bincode::config::Configuration<
-    bincode::config::LittleEndian,
-    bincode::config::Varint,
-    bincode::config::Limit<DECODE_LIMIT>,
-> {
-    bincode::config::standard().with_limit::<DECODE_LIMIT>()
+/// Decodes a binary payload under bincode's limit `LIMIT` \[bytes\].
+fn decode_limited<T: DeserializeOwned, const LIMIT: usize>(
+    payload: &[u8],
+) -> Result<(T, usize), bincode::error::DecodeError> {
+    bincode::serde::decode_from_slice::<T, _>(
+        payload,
+        bincode::config::standard().with_limit::<LIMIT>(),
+    )
+}
+
+/// Decodes a binary payload with a limit of at least [`CLAIM_PER_PAYLOAD_BYTE`] × its length
+/// (bincode takes the limit as a constant: the smallest of a few powers of two that is enough,
+/// so a corrupt length can make it allocate at most 16 times that, 1 MiB for small payloads).
+fn decode_payload<T: DeserializeOwned>(
+    payload: &[u8],
+) -> Result<(T, usize), bincode::error::DecodeError> {
+    let need = payload.len().saturating_mul(CLAIM_PER_PAYLOAD_BYTE);
+    if need <= 1 << 20 {
+        decode_limited::<T, { 1 << 20 }>(payload)
+    } else if need <= 1 << 24 {
+        decode_limited::<T, { 1 << 24 }>(payload)
+    } else if need <= 1 << 28 {
+        decode_limited::<T, { 1 << 28 }>(payload)
+    } else if need <= 1 << 32 {
+        decode_limited::<T, { 1 << 32 }>(payload)
+    } else if need <= 1 << 36 {
+        decode_limited::<T, { 1 << 36 }>(payload)
+    } else if need <= 1 << 40 {
+        decode_limited::<T, { 1 << 40 }>(payload)
+    } else {
+        decode_limited::<T, { usize::MAX }>(payload)
+    }
 }
 
 /// A writer that feeds a CRC-32 and counts the bytes it passes on.
@@ -335,8 +366,7 @@ pub fn checkpoint_from_bytes<T: DeserializeOwned>(
         }
         StateBytes::Binary(payload) => {
             let (state, used) =
-                bincode::serde::decode_from_slice::<T, _>(payload, bincode_decode_config())
-                    .map_err(|e| state_error(clip(&e.to_string())))?;
+                decode_payload::<T>(payload).map_err(|e| state_error(clip(&e.to_string())))?;
             if used != payload.len() {
                 return Err(state_error(format!(
                     "the state uses {used} of the payload's {} bytes",

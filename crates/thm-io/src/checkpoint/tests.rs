@@ -303,3 +303,55 @@ fn a_huge_length_in_the_payload_is_an_error_not_a_panic() {
     let err = checkpoint_from_bytes::<FuzzState>(&path(), &bytes, "fuzz", 1).unwrap_err();
     assert!(matches!(err, IoError::CheckpointState { .. }), "{err}");
 }
+
+/// Found by the `checkpoint` fuzz target (600 s run): a string length of 494 GB, under the
+/// former fixed 1 TiB limit, made the decoder allocate it and the failed allocation aborted the
+/// process (`fuzz/regressions/checkpoint/crash-f860…`). The limit now scales with the payload:
+/// a typed error, and states claiming the most per byte (u128 and u64 zeros, empty strings)
+/// still decode.
+#[test]
+fn a_length_beyond_the_payload_is_an_error_not_an_allocation() {
+    #[derive(Debug, Deserialize)]
+    #[allow(dead_code)]
+    enum Shape {
+        Empty,
+        Radius(f64),
+        Box { side: [f64; 2] },
+    }
+    #[derive(Debug, Deserialize)]
+    #[allow(dead_code)]
+    struct FuzzState {
+        step: u64,
+        name: String,
+        x: Vec<f64>,
+        pairs: Vec<(u32, u32)>,
+        flag: Option<bool>,
+        shape: Shape,
+    }
+    let mut bytes = include_bytes!(
+        "../../../../fuzz/regressions/checkpoint/crash-f8601f746a2f2e5af754eb790cfe2ff545ece819"
+    )
+    .to_vec();
+    let n = bytes.len();
+    let crc = crc32fast::hash(&bytes[..n - 4]);
+    bytes[n - 4..].copy_from_slice(&crc.to_le_bytes());
+    let err = checkpoint_from_bytes::<FuzzState>(&path(), &bytes, "fuzz", 1).unwrap_err();
+    assert!(matches!(err, IoError::CheckpointState { .. }), "{err}");
+
+    type Dense = (Vec<u128>, Vec<u64>, Vec<String>, Vec<Option<u32>>);
+    let dense: Dense = (
+        vec![0; 5000],
+        vec![0; 5000],
+        vec![String::new(); 5000],
+        vec![None; 5000],
+    );
+    let dir = std::env::temp_dir().join(format!("thm-io-claim-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("dense.ckpt");
+    save_checkpoint_as(&p, CheckpointEncoding::Binary, "dense", 1, &dense).unwrap();
+    let bytes = std::fs::read(&p).unwrap();
+    assert!(bytes.starts_with(BINARY_MAGIC));
+    let back: Dense = checkpoint_from_bytes(&p, &bytes, "dense", 1).unwrap();
+    assert_eq!(back, dense);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
