@@ -508,4 +508,22 @@ mod tests {
             assert!(s.pressure.is_finite() && s.liquid_fraction > 0.0, "{s:?}");
         }
     }
+
+    /// The fuzz finding `eos_state/crash-1885…`: T = 647.1 K, V = 6.3e-226 m³ and subnormal
+    /// masses have no closure, and the error wrote V and both masses with every digit (1033
+    /// characters). Numbers far from 1 are now written in exponent form.
+    #[test]
+    fn extreme_inputs_give_a_short_message() {
+        for model in [Model::Pr, Model::PrCorrected] {
+            let r = water_air_closure(model).close(
+                647.1,
+                6.341723685788695e-226,
+                1.49554e-319,
+                1.6664e-319,
+            );
+            let e = r.unwrap_err().to_string();
+            assert!(e.len() < 300, "{} characters: {e}", e.len());
+            assert!(e.contains("V = 6.341723685788695e-226 m³"), "{e}");
+        }
+    }
 }
