@@ -113,7 +113,7 @@
 //! Π(1 + α_exp ΔT_avg) to 10⁻¹⁴ through breakage and remeshing).
 //!
 //! The MPM×DEM scheme with the granular rod of B-Sect. 5.2.1 (also as the `thm run` kind
-//! `mpm_dem_rod`) and the model (not yet the case) of the square of B-Sect. 5.2.2; not yet
+//! `mpm_dem_rod`) and the square of B-Sect. 5.2.2 (also as `mpm_dem_square`); not yet
 //! here: the cases of B-Sect. 5.3 and their `thm run` kinds.
 //!
 //! ## Verification ([`verification::cases`])
@@ -129,6 +129,9 @@
 //! - `coupling/mpm_dem_rod` (and `_quick`): B-Sect. 5.2.1, temperature against B-Eq. 55,
 //!   stress after 0.4 s against B-Eq. 56 with K of B-Eq. 58, displacement against B-Eq. 57
 //!   (derived; the printed form has a slip), the quasi-static measures of the DEM time rule.
+//! - `coupling/mpm_dem_square` (and `_quick`): B-Sect. 5.2.2 at a reduced size, the centre
+//!   temperature against B-Eq. 59 with the RVEs' conductivity (friction heat off, reported),
+//!   temperature bounds, the twin's symmetry; σxx, σyy and the twin's moduli reported.
 //! - `coupling/bar_contraction_fixed`: A-Sect. 6 case b, phase masses to 10⁻¹², the energy
 //!   balance to 10⁻¹⁰, the time-step rule (halving Δt_C = 0.1 s moves T_max by < 0.1 K), and
 //!   the paper's 333.3 K and 73.0 kPa as reported rows.

@@ -99,16 +99,16 @@
 //! ([`square::slab_factor`]) with `k_xx` and `k_yy` (tested equal to B-Eq. 59 when they are
 //! equal), and with B-Eq. 59 for their mean.
 //!
-//! **Status: built and tested as a model, not yet a verification case.** A reduced run
-//! (20 × 20 points, 100-disk RVEs, Δt = 2·10⁻⁴ s) needs `s = 10⁴` to stay at N = 2 DEM steps;
-//! at that scaling the RVEs are not quasi-static (largest inertial number 0.022, kinetic
-//! energy 4 % of elastic: the rule's limits flag it) and their friction heat drives the centre
-//! to 167 °C at 0.25 s, while the TM-MPM twin follows B-Eq. 59 (1.3 °C at 0.5 s, 0.17 °C at
-//! 1 s). With μ = 0.001 after consolidation an RVE next to a held side collapses at 0.4 s
-//! (cell narrower than its neighbour search; the error names point 10, step 1997 and
-//! `ε_v = 1.07`, `ε_q = 2.5`). Since `I ∝ √s`, a quasi-static run needs `s ≈ 20` (N ≈ 36 DEM
-//! steps per MPM step, 18 times the DEM work of that run), which does not fit a verification
-//! run on this machine yet.
+//! Verified by `coupling/mpm_dem_square` (and `_quick`, [`verification`]) at a reduced size,
+//! with the friction heat off (`square::GranularSquare::friction_heat`): with B-Table 1's
+//! `ρ c = 1 J/(m³ K)` the quasi-static friction work of the heated RVEs (the same for density
+//! scalings 20 to 400) is worth tens of kelvin, which B-Eq. 59 does not have; and the RVEs'
+//! conductivity grows by a few per cent as they are compressed, which the comparison follows
+//! with `∫ κ̄ dt`. Density scaling 100 (N = 16 DEM steps per MPM step of 2·10⁻⁴ s) keeps the
+//! kinetic energy below 1 % of the elastic after the first 10 ms. An earlier reduced run with
+//! `s = 10⁴` (N = 2) was not quasi-static and its friction heat drove the centre to 167 °C;
+//! with μ = 0.001 after consolidation the packing slides more, not less (575 K-equivalent of
+//! friction work on 4 × 4 points in 0.5 s, kinetic energy 10 % of elastic).
 //!
 //! Units: SI; the MPM side of the rod and the square in °C.
 

@@ -37,6 +37,16 @@ pub struct GranularSquare {
     pub rve: RveParams,
     /// The DEM time rule.
     pub dem_time: DemTimeRule,
+    /// Whether the friction heat of the RVEs (B-Eqs. 32–33) heats the points (the paper's
+    /// model). With B-Table 1's `ρ c = 1 J/(m³ K)` the friction work of the heated RVEs raises
+    /// the square's temperature by tens of kelvin (see [`super::verification`]); B-Eq. 59 is
+    /// conduction alone, so the verification runs with it off and reports the work.
+    #[serde(default = "friction_heat_default")]
+    pub friction_heat: bool,
+}
+
+fn friction_heat_default() -> bool {
+    true
 }
 
 impl GranularSquare {
@@ -60,6 +70,7 @@ impl GranularSquare {
                 step_fraction: 0.2,
                 density_scaling,
             },
+            friction_heat: true,
         }
     }
 }
@@ -162,21 +173,48 @@ impl SquareModel {
         let dt = self.square.time_step;
         self.mpm
             .step_batch(&mut self.state, &mut self.material, dt)?;
+        if !self.square.friction_heat {
+            // The next step's heat load (B-Eq. 18) reads the points' heat source.
+            self.state.points.heat_source.fill(0.0);
+        }
         self.twin_mpm
             .step(&mut self.twin_state, &self.twin_material, dt)?;
         Ok(())
     }
 
+    /// Heat the RVEs' friction work of the last step would deliver to the points,
+    /// `Σ_p W_f,p V_p / V_RVE,p` (J per metre of thickness), whether or not it is applied.
+    pub fn friction_heat_of_step(&self) -> f64 {
+        self.state
+            .material
+            .iter()
+            .zip(&self.state.points.volume)
+            .map(|(pt, v)| pt.friction_work * v / pt.rve_volume)
+            .sum()
+    }
+
     /// Mean of a per-point value over the four points around the centre (`cells` even) or
     /// the centre point (`cells` odd).
     pub fn at_centre(&self, value: impl Fn(usize) -> f64) -> f64 {
-        let n = self.square.cells;
-        if n % 2 == 1 {
-            return value((n / 2) * n + n / 2);
-        }
-        let (a, b) = (n / 2 - 1, n / 2);
-        0.25 * (value(a * n + a) + value(a * n + b) + value(b * n + a) + value(b * n + b))
+        centre_value(self.square.cells, value)
     }
+}
+
+/// Mean of a per-point value over the four points around the centre of a `cells × cells`
+/// square of points numbered row by row (`cells` even), or the centre point (`cells` odd).
+pub fn centre_value(cells: usize, value: impl Fn(usize) -> f64) -> f64 {
+    let n = cells;
+    if n % 2 == 1 {
+        return value((n / 2) * n + n / 2);
+    }
+    let (a, b) = (n / 2 - 1, n / 2);
+    0.25 * (value(a * n + a) + value(a * n + b) + value(b * n + a) + value(b * n + b))
+}
+
+/// B-Eq. 59 (corrected) for orthotropic diffusivities `(κ_x, κ_y)` on the unit square held at
+/// `t1` from `t0`: `T₁ − (T₁ − T₀) θ(x; κ_x) θ(y; κ_y)` (°C).
+pub fn square_temperature(x: [f64; 2], t: f64, kappa: [f64; 2], t0: f64, t1: f64) -> f64 {
+    t1 - (t1 - t0) * slab_factor(x[0], 1.0, kappa[0], t) * slab_factor(x[1], 1.0, kappa[1], t)
 }
 
 /// `θ(x, t)` of a slab `[0, L]` whose faces are held at the boundary temperature:
