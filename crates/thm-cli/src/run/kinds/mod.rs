@@ -3,6 +3,7 @@
 pub mod dem_uniaxial_tension_bar;
 pub mod lumped_cooling;
 pub mod mpm_dem_rod;
+pub mod mpm_dem_square;
 pub mod mpm_semi_infinite_bar;
 pub mod pore_scale_bar;
 
@@ -13,9 +14,10 @@ use super::error::{ConfigError, RunError};
 use super::scenario::{self, DriveOptions, Outcome, Scenario, drive};
 
 /// The `kind` tags.
-const KINDS: [&str; 5] = [
+const KINDS: [&str; 6] = [
     lumped_cooling::LumpedCooling::KIND,
     mpm_dem_rod::MpmDemRod::KIND,
+    mpm_dem_square::MpmDemSquare::KIND,
     mpm_semi_infinite_bar::SemiInfiniteBar::KIND,
     dem_uniaxial_tension_bar::DemTensionBar::KIND,
     pore_scale_bar::PoreScaleBar::KIND,
@@ -47,6 +49,9 @@ pub fn validate(doc: &ScenarioDocument) -> Result<(), ConfigError> {
             scenario::validate::<mpm_semi_infinite_bar::SemiInfiniteBar>(doc)
         }
         mpm_dem_rod::MpmDemRod::KIND => scenario::validate::<mpm_dem_rod::MpmDemRod>(doc),
+        mpm_dem_square::MpmDemSquare::KIND => {
+            scenario::validate::<mpm_dem_square::MpmDemSquare>(doc)
+        }
         dem_uniaxial_tension_bar::DemTensionBar::KIND => {
             scenario::validate::<dem_uniaxial_tension_bar::DemTensionBar>(doc)
         }
@@ -74,6 +79,9 @@ pub fn dispatch(
             drive::<mpm_semi_infinite_bar::SemiInfiniteBar>(doc, file, opts)
         }
         mpm_dem_rod::MpmDemRod::KIND => drive::<mpm_dem_rod::MpmDemRod>(doc, file, opts),
+        mpm_dem_square::MpmDemSquare::KIND => {
+            drive::<mpm_dem_square::MpmDemSquare>(doc, file, opts)
+        }
         dem_uniaxial_tension_bar::DemTensionBar::KIND => {
             drive::<dem_uniaxial_tension_bar::DemTensionBar>(doc, file, opts)
         }
