@@ -77,13 +77,13 @@ pub fn cases() -> Vec<Case> {
         },
         Case {
             name: "coupling/mpm_dem_square",
-            description: "B-Sect. 5.2.2: 2D square heated on all sides, TM-DEMPM and its TM-MPM twin, 1 s (reduced size, see notes): centre T vs B-Eq. 59",
+            description: "B-Sect. 5.2.2: 2D square heated on all sides, TM-DEMPM and its TM-MPM twin, 1 s, reduced to 16 x 16 points with 100-disk RVEs density-scaled by 100 (the paper: 40 x 40, 400 disks; ~100x the DEM work): centre T vs B-Eq. 59 (friction heat off, reported), bounds, twin symmetry",
             quick: false,
             run: square_case_full,
         },
         Case {
             name: "coupling/mpm_dem_square_quick",
-            description: "B-Sect. 5.2.2 square, reduced (see notes): centre T vs B-Eq. 59, temperature bounds, twin symmetry",
+            description: "B-Sect. 5.2.2 square for 0.25 s on 8 x 8 points with 100-disk RVEs density-scaled by 100: centre T vs B-Eq. 59 (friction heat off, reported), bounds, twin symmetry",
             quick: true,
             run: square_case_quick,
         },
