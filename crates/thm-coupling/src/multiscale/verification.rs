@@ -380,7 +380,7 @@ pub fn square_case(sq: &GranularSquare, duration: f64) -> Result<CaseOutput, Cas
         .map(|t| (t / sq.time_step).round() as u64)
         .filter(|s| *s <= steps)
         .collect();
-    let mut series: [Vec<f64>; 9] = Default::default();
+    let mut series: [Vec<f64>; 11] = Default::default();
     let mut centre = Vec::new();
     let (mut t_min, mut t_max) = (f64::INFINITY, f64::NEG_INFINITY);
     let (mut twin_min, mut twin_max) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -432,8 +432,9 @@ pub fn square_case(sq: &GranularSquare, duration: f64) -> Result<CaseOutput, Cas
             let twin_tc = m.at_centre(|i| q.remapped_temperature[i]);
             let rc = m.at_centre(|i| r[i]);
             let rmc = m.at_centre(|i| rm[i]);
+            let rtc = m.at_centre(|i| rt[i]);
             if checks.contains(&n) {
-                centre.push((t, tc, rc, twin_tc, rmc, m.at_centre(|i| rt[i])));
+                centre.push((t, tc, rc, twin_tc, rmc, rtc));
             }
             if n % every == 0 {
                 for (s, v) in series.iter_mut().zip([
@@ -446,6 +447,8 @@ pub fn square_case(sq: &GranularSquare, duration: f64) -> Result<CaseOutput, Cas
                     m.at_centre(|i| p.stress[i][1] - s0[1]),
                     tsx,
                     tsy,
+                    tc - (twin_tc - rmc),
+                    rtc,
                 ]) {
                     s.push(v);
                 }
@@ -595,7 +598,7 @@ pub fn square_case(sq: &GranularSquare, duration: f64) -> Result<CaseOutput, Cas
         disk_steps / wall,
         f64::NAN,
     ));
-    let [t, tc, twin_tc, rc, rmc, sx, sy, tsx, tsy] = series;
+    let [t, tc, twin_tc, rc, rmc, sx, sy, tsx, tsy, corrected, rtc] = series;
     let line = |label: &str, role: SeriesRole, y: Vec<f64>| Series {
         label: label.into(),
         role,
@@ -612,6 +615,12 @@ pub fn square_case(sq: &GranularSquare, duration: f64) -> Result<CaseOutput, Cas
             line("TM-MPM twin", SeriesRole::Measured, twin_tc),
             line("B-Eq. 59, RVE's k_xx, k_yy", SeriesRole::Reference, rc),
             line("B-Eq. 59, mean k", SeriesRole::Reference, rmc),
+            line(
+                "TM-DEMPM less the grid's error (twin - B-Eq. 59)",
+                SeriesRole::Measured,
+                corrected,
+            ),
+            line("B-Eq. 59, RVEs' ∫κ dt", SeriesRole::Reference, rtc),
         ],
     });
     out.plots.push(Plot {
