@@ -27,6 +27,13 @@ pub struct MpmParameters {
     /// The factor `b > 0` of the thermal time-step limit B-Eq. 31 (paper default 1).
     #[serde(default = "one")]
     pub thermal_time_step_factor: f64,
+    /// Nodes whose mass is at most this (kg per metre of thickness) are left out of the
+    /// velocity update (velocity 0, like an empty node). A node that a point's domain only
+    /// grazes at a free surface gets a tiny mass but a finite share of the point's internal
+    /// force, and its velocity, hence the point's velocity gradient, blows up (the small-mass
+    /// problem of GIMP). 0 (the default): every node with mass is updated.
+    #[serde(default)]
+    pub node_mass_tolerance: f64,
     /// Body force per unit mass `b_i` (m/s²), e.g. gravity.
     #[serde(default)]
     pub gravity: [f64; 2],
@@ -54,6 +61,7 @@ impl MpmParameters {
             grid_damping: 0.0,
             particle_damping: 0.0,
             thermal_time_step_factor: 1.0,
+            node_mass_tolerance: 0.0,
             gravity: [0.0; 2],
             velocity_conditions: Vec::new(),
             temperature_conditions: Vec::new(),
@@ -87,6 +95,29 @@ fn unit_interval(name: &str, v: f64) -> Result<(), MpmError> {
     }
 }
 
+/// Checks every surface load (positive layer thickness, finite traction and flux), naming
+/// the first bad one by its key path.
+pub(crate) fn check_surface_loads(loads: &[SurfaceLoad]) -> Result<(), MpmError> {
+    for (k, s) in loads.iter().enumerate() {
+        if !(s.layer_thickness.is_finite() && s.layer_thickness > 0.0) {
+            return Err(MpmError::InvalidParameter {
+                name: format!("surface_loads[{k}].layer_thickness"),
+                value: s.layer_thickness,
+                allowed: "(0, inf) m",
+            });
+        }
+        let vals = [s.traction[0], s.traction[1], s.inward_heat_flux];
+        if let Some(v) = vals.iter().find(|v| !v.is_finite()) {
+            return Err(MpmError::InvalidParameter {
+                name: format!("surface_loads[{k}].traction/inward_heat_flux"),
+                value: *v,
+                allowed: "finite",
+            });
+        }
+    }
+    Ok(())
+}
+
 impl MpmConfig {
     /// Validates the parameters.
     pub fn new(params: MpmParameters) -> Result<Self, MpmError> {
@@ -100,6 +131,14 @@ impl MpmConfig {
                 name: "thermal_time_step_factor".into(),
                 value: b,
                 allowed: "(0, inf)",
+            });
+        }
+        let tol = params.node_mass_tolerance;
+        if !(tol.is_finite() && tol >= 0.0) {
+            return Err(MpmError::InvalidParameter {
+                name: "node_mass_tolerance".into(),
+                value: tol,
+                allowed: "[0, inf) kg/m",
             });
         }
         for (k, g) in params.gravity.iter().enumerate() {
@@ -120,23 +159,7 @@ impl MpmConfig {
                 });
             }
         }
-        for (k, s) in params.surface_loads.iter().enumerate() {
-            if !(s.layer_thickness.is_finite() && s.layer_thickness > 0.0) {
-                return Err(MpmError::InvalidParameter {
-                    name: format!("surface_loads[{k}].layer_thickness"),
-                    value: s.layer_thickness,
-                    allowed: "(0, inf) m",
-                });
-            }
-            let vals = [s.traction[0], s.traction[1], s.inward_heat_flux];
-            if let Some(v) = vals.iter().find(|v| !v.is_finite()) {
-                return Err(MpmError::InvalidParameter {
-                    name: format!("surface_loads[{k}].traction/inward_heat_flux"),
-                    value: *v,
-                    allowed: "finite",
-                });
-            }
-        }
+        check_surface_loads(&params.surface_loads)?;
         let mut params = params;
         for (k, w) in params.walls.iter_mut().enumerate() {
             *w = w.validated(k)?;

@@ -545,6 +545,7 @@ struct UpdateInputs<'a> {
     grid: &'a Grid,
     walls: &'a [RigidWall],
     gravity: [f64; 2],
+    node_mass_tolerance: f64,
     dt: f64,
     time: f64,
 }
@@ -584,7 +585,7 @@ fn update_row(
     let mut bad = None;
     for i in cols {
         let s = &sums[i];
-        let (v0, v1) = if s.mass > 0.0 {
+        let (v0, v1) = if s.mass > inp.node_mass_tolerance {
             let inv_m = 1.0 / s.mass;
             let mut v0 = [s.momentum[0] * inv_m, s.momentum[1] * inv_m];
             let mut v1 = [
@@ -774,6 +775,14 @@ impl Mpm {
     /// The grid.
     pub fn grid(&self) -> &Grid {
         &self.config.grid
+    }
+    /// Replaces the surface loads (validated as in [`MpmConfig::new`]) from the next step on,
+    /// for loads that follow the material (e.g. a confining pressure on a bulging side, one
+    /// load per boundary point). Everything else of the stepper is kept.
+    pub fn set_surface_loads(&mut self, loads: Vec<SurfaceLoad>) -> Result<(), MpmError> {
+        crate::config::check_surface_loads(&loads)?;
+        self.config.params.surface_loads = loads;
+        Ok(())
     }
     /// Nodal fields of the last step.
     pub fn grid_fields(&self) -> &GridFields {
@@ -1383,6 +1392,7 @@ impl Mpm {
             grid,
             walls,
             gravity: self.config.params.gravity,
+            node_mass_tolerance: self.config.params.node_mass_tolerance,
             dt,
             time,
         });
@@ -1476,6 +1486,7 @@ impl Mpm {
             grid,
             walls: &self.config.params.walls,
             gravity: self.config.params.gravity,
+            node_mass_tolerance: self.config.params.node_mass_tolerance,
             dt,
             time,
         };

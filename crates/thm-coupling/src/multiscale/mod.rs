@@ -112,6 +112,7 @@
 //!
 //! Units: SI; the MPM side of the rod and the square in °C.
 
+pub mod biaxial;
 pub mod error;
 pub mod material;
 pub mod params;
@@ -120,6 +121,7 @@ pub mod square;
 pub mod stages;
 pub mod verification;
 
+pub use biaxial::{BiaxialModel, BiaxialTest, Compaction};
 pub use error::MultiscaleError;
 pub use material::{RveMaterial, RvePoint};
 pub use params::{DemTimeRule, MultiscaleConfig, MultiscaleParams, QuasiStaticLimits};
