@@ -73,6 +73,7 @@ pub fn cases() -> Vec<Case> {
         run: contraction_free_start_case,
     });
     cases.extend(crate::multiscale::verification::cases());
+    cases.extend(crate::multiscale::biaxial_verification::cases());
     cases
 }
 

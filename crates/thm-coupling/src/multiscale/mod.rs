@@ -113,6 +113,7 @@
 //! Units: SI; the MPM side of the rod and the square in °C.
 
 pub mod biaxial;
+pub mod biaxial_verification;
 pub mod error;
 pub mod material;
 pub mod params;
