@@ -2,6 +2,7 @@
 
 pub mod dem_uniaxial_tension_bar;
 pub mod lumped_cooling;
+pub mod mpm_dem_biaxial;
 pub mod mpm_dem_rod;
 pub mod mpm_dem_square;
 pub mod mpm_semi_infinite_bar;
@@ -14,13 +15,14 @@ use super::error::{ConfigError, RunError};
 use super::scenario::{self, DriveOptions, Outcome, Scenario, drive};
 
 /// The `kind` tags.
-const KINDS: [&str; 6] = [
+const KINDS: [&str; 7] = [
     lumped_cooling::LumpedCooling::KIND,
     mpm_dem_rod::MpmDemRod::KIND,
     mpm_dem_square::MpmDemSquare::KIND,
     mpm_semi_infinite_bar::SemiInfiniteBar::KIND,
     dem_uniaxial_tension_bar::DemTensionBar::KIND,
     pore_scale_bar::PoreScaleBar::KIND,
+    mpm_dem_biaxial::MpmDemBiaxial::KIND,
 ];
 
 /// The `kind` tags, for error messages.
@@ -52,6 +54,9 @@ pub fn validate(doc: &ScenarioDocument) -> Result<(), ConfigError> {
         mpm_dem_square::MpmDemSquare::KIND => {
             scenario::validate::<mpm_dem_square::MpmDemSquare>(doc)
         }
+        mpm_dem_biaxial::MpmDemBiaxial::KIND => {
+            scenario::validate::<mpm_dem_biaxial::MpmDemBiaxial>(doc)
+        }
         dem_uniaxial_tension_bar::DemTensionBar::KIND => {
             scenario::validate::<dem_uniaxial_tension_bar::DemTensionBar>(doc)
         }
@@ -81,6 +86,9 @@ pub fn dispatch(
         mpm_dem_rod::MpmDemRod::KIND => drive::<mpm_dem_rod::MpmDemRod>(doc, file, opts),
         mpm_dem_square::MpmDemSquare::KIND => {
             drive::<mpm_dem_square::MpmDemSquare>(doc, file, opts)
+        }
+        mpm_dem_biaxial::MpmDemBiaxial::KIND => {
+            drive::<mpm_dem_biaxial::MpmDemBiaxial>(doc, file, opts)
         }
         dem_uniaxial_tension_bar::DemTensionBar::KIND => {
             drive::<dem_uniaxial_tension_bar::DemTensionBar>(doc, file, opts)

@@ -1,0 +1,393 @@
+//! `kind = "mpm_dem_biaxial"`: the biaxial compression test of B-Sect. 5.3.1 (Zhao et al.
+//! 2022) on the MPM×DEM scheme of `thm-coupling` (`thm_coupling::multiscale::biaxial`).
+//!
+//! A 1 m wide specimen of `cells[0] × cells[1]` square cells with `points_per_cell²` points
+//! each, every point carrying an RVE of `disks` disks consolidated to the confining stress
+//! (dense: μ = 0.01, loose: μ = 0.5; sheared with μ = 0.5), confined laterally by a follower
+//! pressure, between rough plates; the top plate moves down at `plate_speed`. The run ends at
+//! `time.end` (the paper: 20 % strain of 2 m at 0.02 m/s, 20 s). Monitored: axial strain,
+//! stress ratio from the plate and from the point stresses, plate stress, volumetric strain,
+//! largest temperature rise, heat generated, friction work (upscaled and raw over all RVEs),
+//! thermal energy, plate work, quasi-static measures. The profile `stress_strain` is the
+//! plate stress against the axial strain so far (B-Fig. 13). The checkpoint holds the
+//! `MpmState` with every RVE, the running sums and the stress–strain samples; the stepper
+//! (grid, plates, consolidated template) is rebuilt from the parameters on resume.
+
+use serde::{Deserialize, Serialize};
+use thm_coupling::multiscale::biaxial::{BiaxialModel, BiaxialTest, BiaxialTotals, Compaction};
+use thm_coupling::multiscale::{RvePoint, biaxial::BiaxialRecord};
+use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
+use thm_mpm::{BatchConstitutive, MpmState};
+
+use crate::run::config::TimeControl;
+use crate::run::error::{ConfigError, RunError};
+use crate::run::profiles::Profile;
+use crate::run::scenario::{FrameSink, Scenario};
+use crate::run::summary::SummaryRow;
+use crate::run::units::{Pressure, Quantity, Temperature, Velocity};
+
+/// `[biaxial]`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BiaxialParams {
+    /// `dense` (consolidated with μ = 0.01) or `loose` (μ = 0.5).
+    pub compaction: Compaction,
+    /// Cells along x and y, each in [1, 1000] (the paper: [10, 20]); the specimen is 1 m wide
+    /// and `cells[1]/cells[0]` m high.
+    pub cells: [usize; 2],
+    /// Points per cell along each direction, in [2, 4] (the paper: 2).
+    pub points_per_cell: usize,
+    /// Disks per RVE, in [10, 10000] (the paper: 400).
+    pub disks: usize,
+    /// Seed of the packing.
+    #[serde(default = "one")]
+    pub seed: u64,
+    /// Density scaling of the RVE disks (DEM time rule), in [1, 1e6].
+    pub density_scaling: f64,
+    /// Confining stress (the paper: 100 kPa).
+    pub confining_stress: Quantity<Pressure>,
+    /// Speed of the top plate (the paper: 0.02 m/s).
+    pub plate_speed: Quantity<Velocity>,
+    /// Initial uniform temperature (not stated in the paper; 20 °C).
+    pub initial_temperature: Quantity<Temperature>,
+}
+
+fn one() -> u64 {
+    1
+}
+
+/// The kind's sections of the scenario file.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// `[biaxial]`.
+    pub biaxial: BiaxialParams,
+}
+
+/// What a checkpoint holds.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct State {
+    /// Points with their RVEs.
+    pub mpm: MpmState<RvePoint>,
+    /// Running sums (heat, friction work, plate work).
+    pub totals: BiaxialTotals,
+    /// `(axial strain, plate stress)` every [`SAMPLE_EVERY`] steps.
+    pub stress_strain: Vec<[f64; 2]>,
+}
+
+/// Steps between stress–strain samples.
+pub const SAMPLE_EVERY: u64 = 10;
+
+/// The stepper: the model (its `state` is swapped in for each step) and frame scratch.
+#[derive(Debug)]
+pub struct MpmDemBiaxial {
+    model: BiaxialModel,
+    rise: Vec<f64>,
+    sxx: Vec<f64>,
+    syy: Vec<f64>,
+    deviatoric: Vec<f64>,
+    kinetic: Vec<f64>,
+}
+
+impl MpmDemBiaxial {
+    /// Runs `f` on the model with `state` swapped in.
+    fn with_state<R>(&mut self, state: &mut State, f: impl FnOnce(&mut BiaxialModel) -> R) -> R {
+        std::mem::swap(&mut self.model.state, &mut state.mpm);
+        std::mem::swap(&mut self.model.totals, &mut state.totals);
+        let r = f(&mut self.model);
+        std::mem::swap(&mut self.model.state, &mut state.mpm);
+        std::mem::swap(&mut self.model.totals, &mut state.totals);
+        r
+    }
+
+    /// The history row of `state` (the plate reaction is the stepper's last step's).
+    fn record(&self, state: &State) -> BiaxialRecord {
+        self.model.record_of(&state.mpm, &state.totals)
+    }
+}
+
+fn check_range(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), ConfigError> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(())
+    } else {
+        Err(ConfigError::new(
+            key,
+            format!("must be in [{lo}, {hi}], got {v}"),
+        ))
+    }
+}
+
+impl Scenario for MpmDemBiaxial {
+    const KIND: &'static str = "mpm_dem_biaxial";
+    const STATE_VERSION: u32 = 1;
+    type Params = Params;
+    type State = State;
+
+    fn init(p: &Params, time: &TimeControl) -> Result<(Self, State), ConfigError> {
+        let b = &p.biaxial;
+        for (k, v) in b.cells.iter().enumerate() {
+            if !(1..=1000).contains(v) {
+                return Err(ConfigError::new(
+                    format!("biaxial.cells[{k}]"),
+                    format!("must be in [1, 1000], got {v}"),
+                ));
+            }
+        }
+        if !(2..=4).contains(&b.points_per_cell) {
+            return Err(ConfigError::new(
+                "biaxial.points_per_cell",
+                format!("must be in [2, 4], got {}", b.points_per_cell),
+            ));
+        }
+        if !(10..=10_000).contains(&b.disks) {
+            return Err(ConfigError::new(
+                "biaxial.disks",
+                format!("must be in [10, 10000], got {}", b.disks),
+            ));
+        }
+        check_range("biaxial.density_scaling", b.density_scaling, 1.0, 1e6)?;
+        check_range(
+            "biaxial.confining_stress",
+            b.confining_stress.si(),
+            1.0,
+            1e8,
+        )?;
+        let h = 1.0 / b.cells[0] as f64;
+        check_range(
+            "biaxial.plate_speed",
+            b.plate_speed.si(),
+            1e-9,
+            0.05 * h / time.dt,
+        )?;
+        check_range(
+            "biaxial.initial_temperature",
+            b.initial_temperature.si(),
+            1.0,
+            1e4,
+        )?;
+        let mut t = BiaxialTest::reduced(
+            b.compaction,
+            b.cells,
+            b.points_per_cell,
+            b.disks,
+            b.density_scaling,
+        );
+        t.seed = b.seed;
+        t.confining_stress = b.confining_stress.si();
+        t.plate_speed = b.plate_speed.si();
+        t.initial_temperature = b.initial_temperature.si() - 273.15;
+        t.time_step = time.dt;
+        let travel = t.plate_speed * time.dt * time.n_steps as f64;
+        if travel > 0.5 * t.height {
+            return Err(ConfigError::new(
+                "time.end",
+                format!(
+                    "the plate would travel {travel} m, more than half the specimen's {} m",
+                    t.height
+                ),
+            ));
+        }
+        t.target_strain = (travel / t.height).max(1e-6);
+        let model =
+            BiaxialModel::new(&t).map_err(|e| ConfigError::new("biaxial", e.to_string()))?;
+        let material = &model.material;
+        let limit = model
+            .mpm
+            .time_step_limits_with(&model.state.points, |i| {
+                material.wave_modulus(&model.state.material[i])
+            })
+            .min();
+        if time.dt > limit {
+            return Err(ConfigError::new(
+                "time.step",
+                format!(
+                    "must be ≤ {limit:e} s (B-Eqs. 30–31 stability limit), got {} s",
+                    time.dt
+                ),
+            ));
+        }
+        let n = model.state.points.len();
+        let state = State {
+            mpm: model.state.clone(),
+            totals: model.totals,
+            stress_strain: vec![[0.0, t.confining_stress]],
+        };
+        Ok((
+            Self {
+                model,
+                rise: vec![0.0; n],
+                sxx: vec![0.0; n],
+                syy: vec![0.0; n],
+                deviatoric: vec![0.0; n],
+                kinetic: vec![0.0; n],
+            },
+            state,
+        ))
+    }
+
+    fn restore(&mut self, state: &State) -> Result<(), RunError> {
+        let (mpm, totals) = (state.mpm.clone(), state.totals);
+        self.model
+            .restore(mpm, totals)
+            .map_err(|e| RunError::Physics {
+                step: state.mpm.step,
+                time: state.mpm.time,
+                message: e.to_string(),
+            })
+    }
+
+    fn step(&mut self, state: &mut State, step: u64, _dt: f64) -> Result<(), RunError> {
+        let time = state.mpm.time;
+        self.with_state(state, |m| m.step())
+            .map_err(|e| RunError::Physics {
+                step,
+                time,
+                message: e.to_string(),
+            })?;
+        if state.mpm.step.is_multiple_of(SAMPLE_EVERY) {
+            let r = self.record(state);
+            state.stress_strain.push([r.axial_strain, r.plate_stress]);
+        }
+        Ok(())
+    }
+
+    fn monitor_columns(&self) -> Vec<Column> {
+        vec![
+            Column::new("axial_strain", "-"),
+            Column::new("stress_ratio_plate", "-"),
+            Column::new("stress_ratio_points", "-"),
+            Column::new("plate_stress", "Pa"),
+            Column::new("mean_sigma_xx", "Pa"),
+            Column::new("mean_sigma_yy", "Pa"),
+            Column::new("volumetric_strain", "-"),
+            Column::new("largest_temperature_rise", "K"),
+            Column::new("heat_generated", "J/m"),
+            Column::new("friction_work_upscaled", "J/m"),
+            Column::new("friction_work_all_rves", "J"),
+            Column::new("thermal_energy", "J/m"),
+            Column::new("plate_work", "J/m"),
+            Column::new("largest_rve_inertial_number", "-"),
+            Column::new("largest_rve_kinetic_ratio", "-"),
+        ]
+    }
+
+    fn monitor(&self, state: &State, values: &mut Vec<f64>) {
+        let r = self.record(state);
+        values.extend([
+            r.axial_strain,
+            r.stress_ratio,
+            r.point_stress_ratio,
+            r.plate_stress,
+            r.mean_sigma_xx,
+            r.mean_sigma_yy,
+            r.volumetric_strain,
+            r.max_temperature_rise,
+            r.heat_generated,
+            r.friction_work_upscaled,
+            r.friction_work_rves,
+            r.thermal_energy,
+            r.plate_work,
+            r.max_inertial_number,
+            r.max_kinetic_ratio,
+        ]);
+    }
+
+    fn frame(&mut self, state: &State, sink: &mut FrameSink<'_>) -> Result<(), IoError> {
+        let p = &state.mpm.points;
+        let t0 = self.model.test.initial_temperature;
+        for k in 0..p.len() {
+            self.rise[k] = p.temperature[k] - t0;
+            self.sxx[k] = -p.stress[k][0];
+            self.syy[k] = -p.stress[k][1];
+            let e = p.strain[k];
+            // ε_q of B-Eq. 48 (n = 2) from the accumulated small strain.
+            let half = 0.5 * (e[0] - e[1]);
+            self.deviatoric[k] = (2.0 * (half * half + e[2] * e[2])).sqrt();
+        }
+        for (k, r) in self.kinetic.iter_mut().zip(&state.mpm.material) {
+            *k = r.kinetic_ratio;
+        }
+        let grid = UnstructuredGrid::particles(&p.position)
+            .with_point_field("temperature_rise [K]", FieldValues::Scalar(&self.rise))
+            .with_point_field(
+                "sigma_xx [Pa] (compression +)",
+                FieldValues::Scalar(&self.sxx),
+            )
+            .with_point_field(
+                "sigma_yy [Pa] (compression +)",
+                FieldValues::Scalar(&self.syy),
+            )
+            .with_point_field("deviatoric_strain", FieldValues::Scalar(&self.deviatoric))
+            .with_point_field("heat_source [W/m^3]", FieldValues::Scalar(&p.heat_source))
+            .with_point_field("rve_kinetic_ratio", FieldValues::Scalar(&self.kinetic))
+            .with_point_field("velocity [m/s]", FieldValues::Vector2(&p.velocity));
+        sink("material_points", &grid)
+    }
+
+    fn profiles(&self, state: &State, _time: f64) -> Vec<Profile> {
+        let (x, y) = state.stress_strain.iter().map(|s| (s[0], s[1])).unzip();
+        vec![Profile {
+            name: "stress_strain".into(),
+            x_label: "axial strain [-]".into(),
+            y_label: "plate stress sigma_yy [Pa]".into(),
+            x,
+            y,
+            reference: None,
+        }]
+    }
+
+    fn summary(&self, state: &State, _time: f64) -> Vec<SummaryRow> {
+        let r = self.record(state);
+        let sc = self.model.test.confining_stress;
+        let ratio = |s: f64| (s - sc) / (s + sc);
+        let peak = state
+            .stress_strain
+            .iter()
+            .fold(f64::NEG_INFINITY, |m, s| m.max(ratio(s[1])));
+        let end = r.axial_strain;
+        let tail: Vec<f64> = state
+            .stress_strain
+            .iter()
+            .filter(|s| s[0] >= end - 0.02)
+            .map(|s| ratio(s[1]))
+            .collect();
+        let residual = tail.iter().sum::<f64>() / tail.len().max(1) as f64;
+        let row = |q: &str, unit: &str, measured: f64, reference: Option<f64>| SummaryRow {
+            quantity: q.into(),
+            unit: unit.into(),
+            measured,
+            reference,
+        };
+        vec![
+            row("axial_strain", "-", r.axial_strain, Some(0.2)),
+            row("peak_stress_ratio_plate", "-", peak, None),
+            row(
+                "residual_stress_ratio_plate (last 2 % strain)",
+                "-",
+                residual,
+                None,
+            ),
+            row("residual_over_peak", "-", residual / peak, None),
+            row("volumetric_strain", "-", r.volumetric_strain, None),
+            row(
+                "largest_temperature_rise (paper: up to 1.6 degC)",
+                "K",
+                r.max_temperature_rise,
+                Some(1.6),
+            ),
+            row(
+                "heat_generated (reference: friction work upscaled)",
+                "J/m",
+                r.heat_generated,
+                Some(r.friction_work_upscaled),
+            ),
+            row(
+                "consolidated void ratio (reference: the paper's)",
+                "-",
+                self.model.packing.void_ratio,
+                Some(self.model.test.compaction.paper_void_ratio()),
+            ),
+        ]
+    }
+}
