@@ -110,7 +110,19 @@
 //! with μ = 0.001 after consolidation the packing slides more, not less (575 K-equivalent of
 //! friction work on 4 × 4 points in 0.5 s, kinetic energy 10 % of elastic).
 //!
-//! Units: SI; the MPM side of the rod and the square in °C.
+//! ## The biaxial test (B-Sect. 5.3.1, [`biaxial`])
+//!
+//! A 1 m × 2 m specimen between rough plates (rigid walls of `thm-mpm` with infinite
+//! friction), the top one moving down, a follower confining pressure on the sides, RVEs
+//! consolidated dense (μ = 0.01) or loose (μ = 0.5) and sheared with μ = 0.5, adiabatic. Its
+//! module docs give the choices: the confinement extrapolated to the surface (the
+//! virtual-layer load on the outer points alone holds only 3/4 of it), a node mass tolerance
+//! against the small-mass nodes the bulging sides graze, the consolidated packing set at rest
+//! before the density scaling, the stress ratio from the plate reaction. Cases
+//! `coupling/mpm_dem_biaxial_quick` and `coupling/mpm_dem_biaxial`
+//! ([`biaxial_verification`]); `docs/cases/mpm_dem_biaxial.md`.
+//!
+//! Units: SI; the MPM side of the rod, the square and the biaxial test in °C.
 
 pub mod biaxial;
 pub mod biaxial_verification;

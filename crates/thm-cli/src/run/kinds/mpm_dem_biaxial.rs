@@ -1,5 +1,5 @@
-//! `kind = "mpm_dem_biaxial"`: the biaxial compression test of B-Sect. 5.3.1 (Zhao et al.
-//! 2022) on the MPM×DEM scheme of `thm-coupling` (`thm_coupling::multiscale::biaxial`).
+//! `kind = "mpm_dem_biaxial"`: the biaxial compression test of B-Sect. 5.3.1 of Zhao et al.
+//! (2022) on the MPM×DEM scheme of `thm-coupling` (`thm_coupling::multiscale::biaxial`).
 //!
 //! A 1 m wide specimen of `cells[0] × cells[1]` square cells with `points_per_cell²` points
 //! each, every point carrying an RVE of `disks` disks consolidated to the confining stress
@@ -269,6 +269,7 @@ impl Scenario for MpmDemBiaxial {
             Column::new("plate_work", "J/m"),
             Column::new("largest_rve_inertial_number", "-"),
             Column::new("largest_rve_kinetic_ratio", "-"),
+            Column::new("rves_without_pressure", "-"),
         ]
     }
 
@@ -290,6 +291,7 @@ impl Scenario for MpmDemBiaxial {
             r.plate_work,
             r.max_inertial_number,
             r.max_kinetic_ratio,
+            r.rves_without_pressure as f64,
         ]);
     }
 
