@@ -24,7 +24,13 @@
 //! * Boundary conditions ([`boundary`]): prescribed nodal temperature (B-Eq. 4a), fixed and
 //!   roller nodal velocity, tractions and heat fluxes through the virtual boundary layer of
 //!   thickness `h` (B-Eqs. 17–18, Zhang et al. 2011), gravity, rigid walls/plates with Coulomb
-//!   friction that move at a prescribed velocity and can be removed at a given time.
+//!   friction that move at a prescribed velocity and can be removed at a given time. Surface
+//!   loads may be replaced between steps (`Mpm::set_surface_loads`, e.g. a follower pressure
+//!   on a bulging side).
+//! * Small-mass nodes: a node that a point's domain only grazes gets a sliver of mass but a
+//!   finite share of the point's internal force, so its velocity blows up; nodes with mass at
+//!   most `MpmParameters::node_mass_tolerance` are left out of the velocity update (velocity
+//!   0). The default 0 updates every node with mass.
 //! * The constitutive seam [`Constitutive`]: a point hands `L`, `F`, remapped `T`, `Ṫ`, `σ`, ρ
 //!   and `Δt` to its material and gets back `σ`, a heat source `Q_t` (W/m³) and a 2 × 2
 //!   conductivity tensor; per-point history (`PointState`) lives in the caller's [`MpmState`].

@@ -362,7 +362,12 @@ impl Scenario for MpmDemBiaxial {
             reference,
         };
         vec![
-            row("axial_strain", "-", r.axial_strain, Some(0.2)),
+            row(
+                "axial_strain (reference: the target of time.end)",
+                "-",
+                r.axial_strain,
+                Some(self.model.test.target_strain),
+            ),
             row("peak_stress_ratio_plate", "-", peak, None),
             row(
                 "residual_stress_ratio_plate (last 2 % strain)",
