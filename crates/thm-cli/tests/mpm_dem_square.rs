@@ -30,7 +30,19 @@ fn reduced(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
         .replace("density_scaling = 100.0", "density_scaling = 1000.0")
         .replace("history_every = 50", "history_every = 10")
         .replace("frame_every = 500", "frame_every = 50")
-        .replace("checkpoint_every = 1000", "checkpoint_every = 50");
+        .replace("checkpoint_every = 2500", "checkpoint_every = 50");
+    // Every edit must have matched the shipped file, or the run would not be the reduced one.
+    for key in [
+        "end = \"20 ms\"",
+        "cells = 4\n",
+        "disks = 30\n",
+        "checkpoint_every = 50\n",
+    ] {
+        assert!(
+            text.contains(key),
+            "the shipped file changed: {key} not set"
+        );
+    }
     let file = dir.join("square.toml");
     std::fs::write(&file, edit(text)).unwrap();
     file
