@@ -27,20 +27,38 @@ pub fn add_sphere_forces(
     contact_spheres: &[[u32; 2]],
     out: &mut [[f64; 2]],
 ) -> Result<(), FlowError> {
+    add_pressure_forces(network, state, out)?;
+    add_shear_forces(network, state, config, contact_spheres, out)
+}
+
+fn sphere_index(
+    n_spheres: usize,
+    what: &'static str,
+    index: usize,
+    s: u32,
+) -> Result<usize, FlowError> {
+    if (s as usize) < n_spheres {
+        Ok(s as usize)
+    } else {
+        Err(FlowError::OutOfRange {
+            name: what,
+            range: "< number of spheres",
+            value: index as f64,
+        })
+    }
+}
+
+/// The pressure part of [`add_sphere_forces`] alone (A-Eqs. 52–53): `P_i e_k w n` on the
+/// sphere behind every wall face.
+pub fn add_pressure_forces(
+    network: &Network,
+    state: &FlowState,
+    out: &mut [[f64; 2]],
+) -> Result<(), FlowError> {
     let parts = network.parts();
     let w = network.width();
     let ns = out.len();
-    let sphere_index = |what: &'static str, index: usize, s: u32| -> Result<usize, FlowError> {
-        if (s as usize) < ns {
-            Ok(s as usize)
-        } else {
-            Err(FlowError::OutOfRange {
-                name: what,
-                range: "< number of spheres",
-                value: index as f64,
-            })
-        }
-    };
+    let sphere_index = |what, index, s| sphere_index(ns, what, index, s);
     for k in 0..parts.wall_pore.len() {
         let s = sphere_index("wall face sphere", k, parts.wall_sphere[k])?;
         let p = state.pressure[parts.wall_pore[k] as usize];
@@ -49,6 +67,22 @@ pub fn add_sphere_forces(
         out[s][0] += p * n[0] * a;
         out[s][1] += p * n[1] * a;
     }
+    Ok(())
+}
+
+/// The shear part of [`add_sphere_forces`] alone (A-Eq. 54): the mean wall stress of every
+/// S2S channel on the two spheres of its contact.
+pub fn add_shear_forces(
+    network: &Network,
+    state: &FlowState,
+    config: &FlowConfig,
+    contact_spheres: &[[u32; 2]],
+    out: &mut [[f64; 2]],
+) -> Result<(), FlowError> {
+    let parts = network.parts();
+    let w = network.width();
+    let ns = out.len();
+    let sphere_index = |what, index, s| sphere_index(ns, what, index, s);
     for c in 0..network.n_channels() {
         let contact = parts.channel_contact[c];
         if contact == NONE {

@@ -159,7 +159,7 @@ pub mod verification;
 pub use eos_fluid::EosFluid;
 pub use error::{ClosureFailure, FlowError, Phase};
 pub use fluid::{LinearLiquidIdealGas, LinearLiquidIdealGasParameters, PoreFluid, PoreState};
-pub use forces::add_sphere_forces;
+pub use forces::{add_pressure_forces, add_shear_forces, add_sphere_forces};
 pub use implicit::MIN_SUBSTEP_FRACTION;
 pub use network::{BoundaryCondition, Network, NetworkParts, SECOND_END};
 pub use params::{FlowConfig, FlowParameters};
