@@ -44,7 +44,7 @@ use thm_vpn_mesh::{BoundarySide, MeshParams, Outline, RemeshCriteriaParams};
 
 use crate::pore_scale::{
     CouplingError, CouplingStepParams, FlowBoundary, FlowScheme, HeatScheme, InitialFluid,
-    PoreScaleConfig, PoreScaleParams, PoreScaleState, Skeleton,
+    PoreScaleConfig, PoreScaleParams, PoreScaleState, PressureForce, Skeleton,
 };
 
 /// Width of the bar (x) \[m\].
@@ -220,6 +220,7 @@ pub fn bar_params(case: BarCase, segments: u32) -> PoreScaleParams {
         boundary_reduction_factor: 0.0115,
         heat,
         heat_scheme: HeatScheme::Implicit,
+        pressure_force: PressureForce::WallFaces,
     }
 }
 

@@ -93,7 +93,12 @@
 //! What is not yet reached is case a's end: after the first breakages the implicit flow
 //! fails in sliver pores (10⁻¹⁸–10⁻¹³ m³ against a median of 10⁻⁹ m³) and the coupled step
 //! shrinks; with the calibrated bonds the run stops at 0.67 s with the flow failing even in
-//! a 10⁻⁷ s coupled step (`docs/cases/bar_contraction_free.md`).
+//! a 10⁻⁷ s coupled step (`docs/cases/bar_contraction_free.md`). The energy-consistent
+//! alternative to A-Eqs. 52–53, the pore pressure through every cell corner with each pore's
+//! undrained response inside the coupled step ([`pore_scale::PressureForce::CellCorners`],
+//! [`pore_scale::pore_forces`]), is in place and tested but stops case a earlier (0.41 s):
+//! thin liquid films between approaching spheres are undrained springs the explicit DEM
+//! cannot resolve at 10⁻⁷ s.
 //!
 //! Temperatures stay between the ends' 278.16 K and the initial 368.16 K in case a (checked
 //! by a `thm run` test through bond breakage). An earlier reading of "fluid cells cooling

@@ -41,7 +41,7 @@ use crate::bar::{
 };
 use crate::pore_scale::{
     CouplingError, FlowScheme, HeatScheme, InitialFluid, PoreScaleConfig, PoreScaleParams,
-    PoreScaleState, PoreScaleStepper, Skeleton,
+    PoreScaleState, PoreScaleStepper, PressureForce, Skeleton,
 };
 
 /// All verification cases of `thm-coupling`.
@@ -120,6 +120,7 @@ pub fn lattice_params(skeleton: Skeleton, remesh: RemeshCriteriaParams) -> PoreS
         boundary_reduction_factor: 0.0115,
         heat: HeatParams::paper_a_table_1(),
         heat_scheme: HeatScheme::Explicit,
+        pressure_force: PressureForce::WallFaces,
     }
 }
 

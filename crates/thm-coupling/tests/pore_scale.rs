@@ -184,6 +184,7 @@ fn uniform_pore_pressure_pushes_the_spheres_as_the_pore_boundary_says() {
         &s.flow,
         config.flow(),
         &s.mesh_contacts.clone(),
+        true,
         &mut force,
         &mut s.dem,
     )

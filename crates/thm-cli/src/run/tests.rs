@@ -991,6 +991,11 @@ growth = 1.2
                 "segments = 16\ndensity_scale = 0.5",
                 "bar.density_scale: must be in 1 … 1e6, got 0.5",
             ),
+            (
+                "segments = 16",
+                "segments = 16\npressure_force = \"cell_edges\"",
+                "bar.pressure_force",
+            ),
             ("growth = 1.2", "growth = 20", "bar.coupling_step.growth"),
             ("min = \"1e-7 s\"", "min = \"1 s\"", "bar.coupling_step.min"),
             (

@@ -65,13 +65,14 @@
 mod adaptive;
 mod error;
 mod params;
+pub mod pore_forces;
 pub mod stages;
 mod state;
 
 pub use adaptive::{AdvanceReport, CouplingStepParams, CouplingStepRule, largest_displacement};
 pub use error::CouplingError;
 pub use params::{
-    FlowBoundary, FlowScheme, HeatScheme, PoreScaleConfig, PoreScaleParams, Skeleton,
+    FlowBoundary, FlowScheme, HeatScheme, PoreScaleConfig, PoreScaleParams, PressureForce, Skeleton,
 };
 pub use state::{
     InitialFluid, PoreScaleState, cell_capacities, circles_of, contact_normal_stress, contacts_of,
@@ -139,6 +140,7 @@ pub struct PoreScaleStepper<F> {
     heat: HeatStepper,
     motion: MeshMotion,
     force: Vec<[f64; 2]>,
+    undrained: pore_forces::UndrainedPores,
     dv_dt: Vec<f64>,
     input: FlowInput,
     old_capacity: Vec<f64>,
@@ -165,6 +167,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             heat: HeatStepper::new(),
             motion: MeshMotion::new(),
             force: Vec::new(),
+            undrained: Default::default(),
             dv_dt: Vec::new(),
             input,
             old_capacity: Vec::new(),
@@ -265,21 +268,58 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             clock = now;
         };
         self.old_capacity = cell_capacities(state, &self.config.params.heat);
+        let corners = free && self.config.params.pressure_force == PressureForce::CellCorners;
         stages::fluid_forces(
             &self.network,
             &state.flow,
             &self.config.flow,
             &state.mesh_contacts,
+            !corners,
             &mut self.force,
             &mut state.dem,
         )?;
+        let mut dt_dem = self.config.params.dem.time_step;
+        if corners {
+            self.undrained.begin(
+                &state.mesh,
+                self.network.pore_cell(),
+                &state.flow,
+                &self.fluid,
+                &state.dem,
+                &self.force,
+            )?;
+            self.undrained.add_start_forces(&mut self.force);
+            dt_dem =
+                pore_forces::resolving_substep(dt_dem, self.undrained.stable_substep(&state.dem))
+                    .map_err(|value| CouplingError::Unphysical {
+                    stage: "fluid forces",
+                    quantity: "DEM sub-step resolving the pores [s]",
+                    place: "packing",
+                    index: 0,
+                    value,
+                    step: state.flow.step,
+                    why: "below Δt_D / 2^20",
+                })?;
+        }
+        let (h, n) = dem_substeps(dt_dem, dt);
         lap(&mut seconds.fluid_forces);
         let mut dem_steps = 0;
         let mut remeshed = None;
         if free {
-            let (h, n) = dem_substeps(self.config.params.dem.time_step, dt);
-            let dem = self.dem_stepper(h)?;
-            stages::dem_steps(dem, h, n, &mut state.dem, &mut state.rotation)?;
+            let undrained = corners.then_some(&mut self.undrained);
+            let dem = match &mut self.dem {
+                Some((old, s)) if *old == h => s,
+                _ => Self::new_dem_stepper(&mut self.dem, &self.config, h)?,
+            };
+            stages::dem_steps(
+                dem,
+                h,
+                n,
+                &mut state.dem,
+                &mut state.rotation,
+                undrained,
+                state.flow.step,
+            )?;
             dem_steps = n;
             lap(&mut seconds.dem);
             stages::mesh_motion(
@@ -388,24 +428,19 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
         })
     }
 
-    /// The DEM stepper for sub-steps of `h` (rebuilt when `h` changes).
-    fn dem_stepper(&mut self, h: f64) -> Result<&mut Stepper<CohesiveFrictional>, CouplingError> {
-        if self.dem.as_ref().is_none_or(|(old, _)| *old != h) {
-            let params = StepperParams {
-                time_step: h,
-                ..self.config.params.dem
-            };
-            let config = params.validate().map_err(CouplingError::Dem)?;
-            self.dem = Some((h, Stepper::new(self.config.law, config)));
-        }
-        match self.dem.as_mut() {
-            Some((_, s)) => Ok(s),
-            None => Err(CouplingError::Parameter {
-                field: "dem.time_step",
-                range: "> 0 s",
-                value: h,
-            }),
-        }
+    /// A new DEM stepper for sub-steps of `h`, stored in `slot`.
+    fn new_dem_stepper<'a>(
+        slot: &'a mut Option<(f64, Stepper<CohesiveFrictional>)>,
+        config: &PoreScaleConfig,
+        h: f64,
+    ) -> Result<&'a mut Stepper<CohesiveFrictional>, CouplingError> {
+        let params = StepperParams {
+            time_step: h,
+            ..config.params.dem
+        };
+        let validated = params.validate().map_err(CouplingError::Dem)?;
+        let (_, s) = slot.insert((h, Stepper::new(config.law, validated)));
+        Ok(s)
     }
 
     fn check(&self, state: &PoreScaleState) -> Result<(), CouplingError> {

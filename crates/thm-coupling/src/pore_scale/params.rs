@@ -52,6 +52,20 @@ pub enum FlowScheme {
     Implicit,
 }
 
+/// How the pore pressures push the spheres.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PressureForce {
+    /// A-Eqs. 52–53: `P_i e_k w n` on the sphere behind every wall face, held over the
+    /// coupled step.
+    #[default]
+    WallFaces,
+    /// `P_i ∂V_i/∂c_s` through every cell corner anchored to a sphere, with each pore's
+    /// undrained response updated before every DEM sub-step (`pore_forces` module docs).
+    /// Used only with a free skeleton; the S2S shear of A-Eq. 54 is unchanged.
+    CellCorners,
+}
+
 /// A fluid boundary condition on one side of the mesh.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -103,6 +117,9 @@ pub struct PoreScaleParams {
     /// Reduction factor of the half-channels to prescribed-pressure reservoirs (A-Eq. 9 form).
     #[serde(default = "default_boundary_reduction_factor")]
     pub boundary_reduction_factor: f64,
+    /// How the pore pressures push the spheres (default: A-Eqs. 52–53).
+    #[serde(default)]
+    pub pressure_force: PressureForce,
     /// Heat transfer (properties, boundary conditions, interface model).
     pub heat: HeatParams,
     /// How heat is advanced.

@@ -7,7 +7,8 @@ use thm_fvm_heat::{
     sphere_mean_temperatures,
 };
 use thm_vpn_flow::{
-    FlowConfig, FlowState, FlowStepper, Network, PoreFluid, SECOND_END, add_sphere_forces,
+    FlowConfig, FlowState, FlowStepper, Network, PoreFluid, SECOND_END, add_pressure_forces,
+    add_shear_forces,
 };
 use thm_vpn_mesh::{
     CellFilter, CellKind, CircleMotion, Contact, MeshMotion, MeshSettings, PackingMesh,
@@ -16,16 +17,18 @@ use thm_vpn_mesh::{
 
 use super::error::CouplingError;
 use super::params::{FlowScheme, HeatScheme};
+use super::pore_forces::UndrainedPores;
 use super::state::{circles_of, contact_normal_stress, contacts_of, fluid_capacity};
 
-/// Stage 1 (A-Eqs. 52–54): the fluid forces on the spheres from the pore pressures and the
-/// S2S wall shear, written into `dem.particles.external_force` (x, y; z = 0). `force` is
-/// scratch (one entry per sphere).
+/// Stage 1 (A-Eqs. 52–54): the fluid forces on the spheres from the pore pressures on the wall
+/// faces (when `wall_pressure`) and the S2S wall shear, written into
+/// `dem.particles.external_force` (x, y; z = 0) and `force` (one entry per sphere).
 pub fn fluid_forces(
     network: &Network,
     flow: &FlowState,
     config: &FlowConfig,
     mesh_contacts: &[Contact],
+    wall_pressure: bool,
     force: &mut Vec<[f64; 2]>,
     dem: &mut DemState,
 ) -> Result<(), CouplingError> {
@@ -33,7 +36,10 @@ pub fn fluid_forces(
     force.clear();
     force.resize(n, [0.0; 2]);
     let spheres: Vec<[u32; 2]> = mesh_contacts.iter().map(|c| c.circles).collect();
-    add_sphere_forces(network, flow, config, &spheres, force).map_err(CouplingError::Flow)?;
+    if wall_pressure {
+        add_pressure_forces(network, flow, force).map_err(CouplingError::Flow)?;
+    }
+    add_shear_forces(network, flow, config, &spheres, force).map_err(CouplingError::Flow)?;
     for (i, (f, out)) in force
         .iter()
         .zip(&mut dem.particles.external_force)
@@ -56,15 +62,22 @@ pub fn fluid_forces(
 }
 
 /// Stage 2: `n` DEM steps (the stepper's Δt_D each), and the turn of every sphere about z
-/// accumulated into `rotation` for the mesh motion.
+/// accumulated into `rotation` for the mesh motion. With `undrained`, the pore pressure
+/// forces follow each pore's undrained response before every step
+/// ([`super::pore_forces::UndrainedPores::apply`]).
 pub fn dem_steps(
     stepper: &mut Stepper<CohesiveFrictional>,
     dt_dem: f64,
     n: u64,
     dem: &mut DemState,
     rotation: &mut [f64],
+    mut undrained: Option<&mut UndrainedPores>,
+    step: u64,
 ) -> Result<(), CouplingError> {
     for _ in 0..n {
+        if let Some(u) = undrained.as_deref_mut() {
+            u.apply(dem, dt_dem, step)?;
+        }
         stepper.step(dem).map_err(CouplingError::Dem)?;
         for (a, w) in rotation.iter_mut().zip(&dem.particles.angular_velocity) {
             *a += w.z * dt_dem;

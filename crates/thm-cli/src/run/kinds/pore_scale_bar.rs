@@ -13,7 +13,7 @@ use thm_coupling::bar::{
 };
 use thm_coupling::pore_scale::{
     CouplingError, CouplingStepParams, CouplingStepRule, PoreScaleParams, PoreScaleState,
-    PoreScaleStepper,
+    PoreScaleStepper, PressureForce,
 };
 use thm_coupling::verification::{WaterAir, water_air};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
@@ -76,6 +76,10 @@ pub struct BarParams {
     /// The coupled-step rule (case a only; default `thm_coupling::bar::case_a_coupling_step`).
     #[serde(default)]
     pub coupling_step: Option<CouplingStepSection>,
+    /// How the pore pressures push the spheres (case a only): `wall_faces` (A-Eqs. 52–53, the
+    /// default) or `cell_corners` (`thm_coupling::pore_scale::pore_forces`).
+    #[serde(default)]
+    pub pressure_force: Option<PressureForce>,
 }
 
 /// `[bar.coupling_step]`: see `thm_coupling::pore_scale::CouplingStepParams`.
@@ -340,6 +344,7 @@ impl Scenario for PoreScaleBar {
                 b.bond_tensile_strength.is_some(),
             ),
             ("bar.coupling_step", b.coupling_step.is_some()),
+            ("bar.pressure_force", b.pressure_force.is_some()),
         ] {
             if given && !free {
                 return Err(ConfigError::new(
@@ -357,6 +362,9 @@ impl Scenario for PoreScaleBar {
         let mut params = bar_params(case, b.segments);
         if let Some(t) = b.liquid_tension {
             params.liquid_tension = t;
+        }
+        if let Some(f) = b.pressure_force {
+            params.pressure_force = f;
         }
         let density_scale = b.density_scale.unwrap_or(CASE_A_DENSITY_SCALE);
         let mut rule = None;
