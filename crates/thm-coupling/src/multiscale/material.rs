@@ -218,12 +218,19 @@ impl RveMaterial {
             .zip(self.totals.par_iter())
             .for_each(|(((point, out), ((input, r), load)), before)| {
                 *out = stages::mpm_response(r);
-                let [dx, dy] = stages::axial_moduli(&point.rve, p);
+                let measures = stages::contact_measures(&point.rve, p);
+                let [dx, dy] = measures.axial_moduli;
                 point.wave_modulus = dx.max(dy);
                 point.friction_work = point.rve.friction_heat_total - before;
                 point.rve_volume = point.rve.volume(p.thickness);
-                let (i, k) =
-                    stages::quasi_static_measures(&point.rve, p, scaling, input, &r.stress);
+                let (i, k) = stages::quasi_static_measures_with(
+                    &point.rve,
+                    p,
+                    scaling,
+                    input,
+                    &r.stress,
+                    measures.elastic_energy,
+                );
                 point.inertial_number = i;
                 point.kinetic_ratio = k;
                 point.substeps = load.substeps;

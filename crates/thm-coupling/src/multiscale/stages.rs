@@ -99,14 +99,36 @@ pub fn mpm_response(r: &RveResponse) -> MaterialResponse {
 /// contacts carrying force or holding an intact bond (as `thm_rve::measure::stiffness`, without
 /// the other 14 entries). Their larger one is the P-wave modulus of B-Eq. 30.
 pub fn axial_moduli(state: &RveState, params: &RveParams) -> [f64; 2] {
+    contact_measures(state, params).axial_moduli
+}
+
+/// What one pass over an RVE's contacts gives the exchange.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactMeasures {
+    /// [`axial_moduli`] (Pa).
+    pub axial_moduli: [f64; 2],
+    /// `thm_rve::measure::elastic_energy`, to the same bits.
+    pub elastic_energy: f64,
+}
+
+/// [`axial_moduli`] and the contacts' elastic energy in one pass over the contacts.
+pub fn contact_measures(state: &RveState, params: &RveParams) -> ContactMeasures {
     let (kn, kt) = (
         params.contact.normal_stiffness,
         params.contact.tangential_stiffness,
     );
     let c = &state.contacts;
     let mut d = [0.0; 2];
+    let mut e = 0.0;
     for ((f, b), h) in c.force_on_b.iter().zip(&c.branch).zip(&c.history) {
-        if *f == thm_dem::Vec2::ZERO && h.bond != thm_dem::BondState::Intact {
+        if *f != thm_dem::Vec2::ZERO {
+            let ft = h.shear_force;
+            let fnv = *f - ft;
+            e += 0.5 * fnv.norm_squared() / kn;
+            if kt > 0.0 {
+                e += 0.5 * ft.norm_squared() / kt;
+            }
+        } else if h.bond != thm_dem::BondState::Intact {
             continue;
         }
         let l2 = b.x * b.x + b.y * b.y;
@@ -118,7 +140,10 @@ pub fn axial_moduli(state: &RveState, params: &RveParams) -> [f64; 2] {
         d[1] += b.y * b.y * (kn * b.y * b.y + kt * b.x * b.x) / l2;
     }
     let inv = 1.0 / state.volume(params.thickness);
-    [d[0] * inv, d[1] * inv]
+    ContactMeasures {
+        axial_moduli: [d[0] * inv, d[1] * inv],
+        elastic_energy: e,
+    }
 }
 
 /// The quasi-static measures of an RVE after its step, `(I, E_k/E_el)`:
@@ -138,6 +163,21 @@ pub fn quasi_static_measures(
     input: &MaterialInput,
     stress: &Mat2,
 ) -> (f64, f64) {
+    let ee = measure::elastic_energy(state, params);
+    quasi_static_measures_with(state, params, density_scaling, input, stress, ee)
+}
+
+/// [`quasi_static_measures`] with the contacts' elastic energy already known
+/// ([`contact_measures`]).
+pub fn quasi_static_measures_with(
+    state: &RveState,
+    params: &RveParams,
+    density_scaling: f64,
+    input: &MaterialInput,
+    stress: &Mat2,
+    elastic_energy: f64,
+) -> (f64, f64) {
+    let ee = elastic_energy;
     let l = input.velocity_gradient;
     let half_diff = 0.5 * (l[0] - l[3]);
     let dxy = 0.5 * (l[1] + l[2]);
@@ -153,7 +193,6 @@ pub fn quasi_static_measures(
         f64::INFINITY
     };
     let ek = measure::kinetic_energy(state);
-    let ee = measure::elastic_energy(state, params);
     let ratio = if ek == 0.0 {
         0.0
     } else if ee > 0.0 {
