@@ -15,6 +15,7 @@ pub mod error;
 pub mod kinds;
 pub mod pictures;
 pub mod profiles;
+pub mod rve_frames;
 pub mod scenario;
 pub mod summary;
 pub mod units;

@@ -1078,6 +1078,7 @@ density_scaling = 1e4
 confining_stress = "100 kPa"
 plate_speed = "0.02 m/s"
 initial_temperature = "20 degC"
+track = [[0.25, 0.5]]
 "#;
 
     #[test]
@@ -1093,8 +1094,12 @@ initial_temperature = "20 degC"
         copy_dir(&full, &resumed);
         std::fs::remove_file(checkpoint_path(&resumed, 60)).unwrap();
         std::fs::remove_file(resumed.join("material_points/material_points_00000060.vtu")).unwrap();
+        for series in ["rve_0_disks", "rve_0_contacts", "rve_0_cell"] {
+            std::fs::remove_file(resumed.join(format!("{series}/{series}_00000060.vtu"))).unwrap();
+        }
         run(&file, &resumed, Some(&checkpoint_path(&resumed, 30))).unwrap();
         assert_same_results(&full, &resumed, "material_points", &[40, 60], 60);
+        assert_same_results(&full, &resumed, "rve_0_contacts", &[40, 60], 60);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
@@ -1119,6 +1124,12 @@ initial_temperature = "20 degC"
         let err = error_of("mpm_biaxial_dt", &text);
         assert!(
             err.contains("biaxial.plate_speed") || err.contains("time.step"),
+            "{err}"
+        );
+        let text = BIAXIAL.replace("[[0.25, 0.5]]", "[[0.25, 0.5], [1.5, 0.5]]");
+        let err = error_of("mpm_biaxial_track", &text);
+        assert!(
+            err.contains("biaxial.track[1]: must lie in the specimen"),
             "{err}"
         );
         let text = BIAXIAL.replace("disks = 30", "disks = 30\ncolour = 1");

@@ -22,6 +22,7 @@ use thm_mpm::{BatchConstitutive, MpmState};
 use crate::run::config::TimeControl;
 use crate::run::error::{ConfigError, RunError};
 use crate::run::profiles::Profile;
+use crate::run::rve_frames::RveFrames;
 use crate::run::scenario::{FrameSink, Scenario};
 use crate::run::summary::SummaryRow;
 use crate::run::units::{Pressure, Quantity, Temperature, Velocity};
@@ -50,6 +51,11 @@ pub struct BiaxialParams {
     pub plate_speed: Quantity<Velocity>,
     /// Initial uniform temperature (not stated in the paper; 20 °C).
     pub initial_temperature: Quantity<Temperature>,
+    /// Material points whose RVEs are written at every frame (disks, contact forces, cell;
+    /// series `rve_K_disks`, `rve_K_contacts`, `rve_K_cell`): the point nearest to each
+    /// `[x, y]` (m) of the specimen as built, at most 16, each inside it. Default: none.
+    #[serde(default)]
+    pub track: Vec<[f64; 2]>,
 }
 
 fn one() -> u64 {
@@ -88,6 +94,9 @@ pub struct MpmDemBiaxial {
     syy: Vec<f64>,
     deviatoric: Vec<f64>,
     kinetic: Vec<f64>,
+    /// Indices of the tracked points.
+    tracked: Vec<usize>,
+    rve_frames: RveFrames,
 }
 
 impl MpmDemBiaxial {
@@ -207,6 +216,35 @@ impl Scenario for MpmDemBiaxial {
                 ),
             ));
         }
+        if b.track.len() > 16 {
+            return Err(ConfigError::new(
+                "biaxial.track",
+                format!("at most 16 points, got {}", b.track.len()),
+            ));
+        }
+        let mut tracked = Vec::with_capacity(b.track.len());
+        for (k, &[x, y]) in b.track.iter().enumerate() {
+            let inside = (0.0..=t.width).contains(&x) && (0.0..=t.height).contains(&y);
+            if !inside {
+                return Err(ConfigError::new(
+                    format!("biaxial.track[{k}]"),
+                    format!(
+                        "must lie in the specimen [0, {}] × [0, {}] m, got [{x}, {y}]",
+                        t.width, t.height
+                    ),
+                ));
+            }
+            let distance = |q: &[f64; 2]| (q[0] - x).hypot(q[1] - y);
+            let nearest = model
+                .state
+                .points
+                .position
+                .iter()
+                .enumerate()
+                .min_by(|a, b| distance(a.1).total_cmp(&distance(b.1)))
+                .map_or(0, |(i, _)| i);
+            tracked.push(nearest);
+        }
         let n = model.state.points.len();
         let state = State {
             mpm: model.state.clone(),
@@ -221,6 +259,8 @@ impl Scenario for MpmDemBiaxial {
                 syy: vec![0.0; n],
                 deviatoric: vec![0.0; n],
                 kinetic: vec![0.0; n],
+                tracked,
+                rve_frames: RveFrames::default(),
             },
             state,
         ))
@@ -324,7 +364,14 @@ impl Scenario for MpmDemBiaxial {
             .with_point_field("heat_source [W/m^3]", FieldValues::Scalar(&p.heat_source))
             .with_point_field("rve_kinetic_ratio", FieldValues::Scalar(&self.kinetic))
             .with_point_field("velocity [m/s]", FieldValues::Vector2(&p.velocity));
-        sink("material_points", &grid)
+        sink("material_points", &grid)?;
+        for (k, &i) in self.tracked.iter().enumerate() {
+            if let Some(point) = state.mpm.material.get(i) {
+                self.rve_frames
+                    .write(&format!("rve_{k}"), &point.rve, sink)?;
+            }
+        }
+        Ok(())
     }
 
     fn profiles(&self, state: &State, _time: f64) -> Vec<Profile> {
