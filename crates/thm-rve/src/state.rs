@@ -300,4 +300,50 @@ impl RveState {
         self.anchor.skin = 0.0;
         Ok(())
     }
+
+    /// One Lagrange–Gauss reduction step of the cell basis: `h₂ ← h₂ − k h₁` with
+    /// `k = round(h₁·h₂ / |h₁|²)`, then `h₁ ← h₁ − k' h₂` with `k' = round(h₁·h₂ / |h₂|²)`.
+    /// The new basis `H' = H U` (`U` unimodular, `det U = 1`) spans the same lattice, so the
+    /// periodic packing, its stress and its contacts are unchanged; only the cell drawn around
+    /// it is less skewed, which keeps a cell sheared without bound (a material point in a
+    /// flow) wide enough for the periodic search. The image shifts become `U⁻¹ s`, the
+    /// reference cell `H_ref U` (so the cell strain B-Eq. 47 is unchanged), and the neighbour
+    /// list is rebuilt at the next step. Returns whether the basis changed.
+    pub fn reduce_cell(&mut self) -> Result<bool, RveError> {
+        let h = *self.cell.matrix();
+        let (mut h1, mut h2) = ([h.at(0, 0), h.at(1, 0)], [h.at(0, 1), h.at(1, 1)]);
+        let dot = |a: [f64; 2], b: [f64; 2]| a[0] * b[0] + a[1] * b[1];
+        let k2 = (dot(h1, h2) / dot(h1, h1)).round();
+        if k2 != 0.0 {
+            h2 = [h2[0] - k2 * h1[0], h2[1] - k2 * h1[1]];
+        }
+        let k1 = (dot(h1, h2) / dot(h2, h2)).round();
+        if k1 != 0.0 {
+            h1 = [h1[0] - k1 * h2[0], h1[1] - k1 * h2[1]];
+        }
+        if k1 == 0.0 && k2 == 0.0 {
+            return Ok(false);
+        }
+        if !(k1.abs() < 1e6 && k2.abs() < 1e6) {
+            return Err(RveError::DegenerateCell {
+                field: "cell reduction",
+                determinant: h.det(),
+            });
+        }
+        let (k1, k2) = (k1 as i32, k2 as i32);
+        // H' = H U with U = U₂ U₁, U₂ = [[1, −k2], [0, 1]], U₁ = [[1, 0], [−k1, 1]].
+        let u =
+            Mat2::new(1.0, -f64::from(k2), 0.0, 1.0).mul(&Mat2::new(1.0, 0.0, -f64::from(k1), 1.0));
+        let h_new = Mat2::new(h1[0], h2[0], h1[1], h2[1]);
+        let h_ref = self.cell.reference().mul(&u);
+        self.cell = PeriodicCell::new(h_ref)?;
+        self.cell.set_matrix(h_new)?;
+        // s' = U⁻¹ s = U₁⁻¹ U₂⁻¹ s: U₂⁻¹ s = (s0 + k2 s1, s1), then U₁⁻¹ (a, b) = (a, k1 a + b).
+        for s in &mut self.contacts.shift {
+            let a = s[0] + k2 * s[1];
+            *s = [a, k1 * a + s[1]];
+        }
+        self.anchor.skin = 0.0;
+        Ok(true)
+    }
 }
