@@ -126,6 +126,7 @@
 
 pub mod biaxial;
 pub mod biaxial_verification;
+pub mod column;
 pub mod error;
 pub mod material;
 pub mod params;
@@ -135,6 +136,7 @@ pub mod stages;
 pub mod verification;
 
 pub use biaxial::{BiaxialModel, BiaxialTest, Compaction};
+pub use column::{ColumnModel, ColumnTest};
 pub use error::MultiscaleError;
 pub use material::{RveMaterial, RvePoint};
 pub use params::{DemTimeRule, MultiscaleConfig, MultiscaleParams, QuasiStaticLimits};

@@ -85,13 +85,30 @@ pub fn rve_loads<S: AsRef<RveState>>(
 /// the sign turned (B-Eq. 49 is compression positive, thm-mpm tension positive) as
 /// `[σxx, σyy, σxy]`, the friction heat source `Q` (W/m³, B-Eq. 33) and the symmetric part of
 /// the fabric conductivity (B-Eq. 34) as `[kxx, kyy, kxy]`.
+///
+/// B-Eq. 34 is a sum of outer products, positive semi-definite; when a single heat pipe is
+/// left (an RVE dilated in a flow) it is of rank one and rounding can make
+/// `k_xx k_yy − k_xy²` a few ulps negative, which `thm-mpm` refuses. `k_xy` is then set to
+/// `±√(k_xx k_yy)(1 − 4ε)`, the rank-one value within rounding ([`psd_conductivity`]).
 pub fn mpm_response(r: &RveResponse) -> MaterialResponse {
     let s = &r.stress;
     let k = &r.conductivity;
     MaterialResponse {
         stress: [-s.at(0, 0), -s.at(1, 1), -0.5 * (s.at(0, 1) + s.at(1, 0))],
         heat_source: r.heat_source,
-        conductivity: [k.at(0, 0), k.at(1, 1), 0.5 * (k.at(0, 1) + k.at(1, 0))],
+        conductivity: psd_conductivity([k.at(0, 0), k.at(1, 1), 0.5 * (k.at(0, 1) + k.at(1, 0))]),
+    }
+}
+
+/// `[k_xx, k_yy, k_xy]` with `k_xy` clamped to `±√(k_xx k_yy)(1 − 4ε)` when rounding has
+/// made `k_xx k_yy < k_xy²` (see [`mpm_response`]); unchanged otherwise (and when not
+/// finite, which `thm-mpm` reports).
+pub fn psd_conductivity(k: [f64; 3]) -> [f64; 3] {
+    if k[0] >= 0.0 && k[1] >= 0.0 && k[0] * k[1] < k[2] * k[2] {
+        let m = (k[0] * k[1]).sqrt() * (1.0 - 4.0 * f64::EPSILON);
+        [k[0], k[1], m.copysign(k[2])]
+    } else {
+        k
     }
 }
 
