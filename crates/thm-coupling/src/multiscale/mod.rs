@@ -127,6 +127,7 @@
 pub mod biaxial;
 pub mod biaxial_verification;
 pub mod column;
+pub mod column_verification;
 pub mod error;
 pub mod material;
 pub mod params;

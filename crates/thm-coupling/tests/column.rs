@@ -1,0 +1,160 @@
+//! The column collapse of B-Sect. 5.3.3 (`thm_coupling::multiscale::column`): the heat
+//! balance to round-off, thread-count independence and save/restore across the release on a
+//! tiny column; the unbonded column collapses and the bonded one stands on the reduced column
+//! of the verification case (release builds only: seconds there, minutes in debug).
+
+use thm_coupling::multiscale::column::{ColumnModel, ColumnTest};
+use thm_coupling::multiscale::column_verification::{reduced_column, run_column};
+
+/// 2 × 2 cells of 1 m with 2 × 2 points each (16 RVEs of 30 disks), Δt = 10⁻³ s, 50 steps
+/// of settling and `collapse` steps after the release, β_b = 0.1 with melting (bonds,
+/// heating plate and friction heat all active).
+fn tiny(collapse: u64) -> ColumnTest {
+    let mut t = ColumnTest::reduced(0.1, true, 2, 30, 1e-3, 1e5);
+    t.settle_time = 0.05;
+    t.collapse_time = collapse as f64 * t.time_step;
+    t
+}
+
+fn json(m: &ColumnModel) -> String {
+    serde_json::to_string(&(&m.state, &m.totals)).unwrap()
+}
+
+/// 1 and 2 rayon threads give the same bits: points, RVEs and the running sums.
+#[test]
+fn one_and_two_threads_give_the_same_bits() {
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let mut m = ColumnModel::new(&tiny(30)).unwrap();
+                while !m.finished() {
+                    m.step().unwrap();
+                }
+                json(&m)
+            })
+    };
+    assert_eq!(run(1), run(2));
+}
+
+/// A state and running sums saved before the release and restored into a freshly built
+/// model continue bit for bit through the release (bond installation, plate heating).
+#[test]
+fn save_and_restore_continue_bit_for_bit() {
+    let t = tiny(30);
+    let mut m = ColumnModel::new(&t).unwrap();
+    for _ in 0..40 {
+        m.step().unwrap();
+    }
+    assert!(!m.totals.released);
+    let saved = json(&m);
+    while !m.finished() {
+        m.step().unwrap();
+    }
+    assert!(m.totals.released);
+    let mut m2 = ColumnModel::new(&t).unwrap();
+    let (state, totals) = serde_json::from_str(&saved).unwrap();
+    m2.restore(state, totals).unwrap();
+    while !m2.finished() {
+        m2.step().unwrap();
+    }
+    assert_eq!(json(&m), json(&m2));
+}
+
+/// Stored heat `Σ m c (T − T₀)` = heat in from the plate + the friction heat of the RVEs,
+/// to 10⁻¹² of the summed per-step heat at every step (a few ε per step, 80 steps); the plate
+/// does heat the column (more than a kelvin on the heated half) and the bonds there are
+/// installed and start to melt.
+#[test]
+fn heat_balance_holds_to_round_off() {
+    let mut m = ColumnModel::new(&tiny(30)).unwrap();
+    while !m.finished() {
+        m.step().unwrap();
+        let r = m.record();
+        assert!(
+            r.heat_balance_residual.abs() <= 1e-12,
+            "step {}: residual {:e}",
+            m.state.step,
+            r.heat_balance_residual
+        );
+    }
+    let r = m.record();
+    assert!(r.plate_heat > 0.0, "plate heat {}", r.plate_heat);
+    assert!(r.mean_rise_heated > 1.0, "rise {}", r.mean_rise_heated);
+    assert!(m.totals.bonds_installed[0] > 0 && m.totals.bonds_installed[1] > 0);
+    assert!(
+        r.bonds_broken_heated > r.bonds_broken_other,
+        "broken heated {} other {}",
+        r.bonds_broken_heated,
+        r.bonds_broken_other
+    );
+}
+
+/// Without melting β_b of B-Eq. 40 stays β_a at any temperature, so the heated half keeps
+/// its bonds over the same history that melts them with melting.
+#[test]
+fn bonds_do_not_melt_without_melting() {
+    let mut t = tiny(30);
+    t.melting = false;
+    let mut m = ColumnModel::new(&t).unwrap();
+    while !m.finished() {
+        m.step().unwrap();
+    }
+    let r = m.record();
+    assert!(r.mean_rise_heated > 1.0);
+    assert_eq!(r.bonds_broken_heated, 0, "{r:?}");
+}
+
+/// The unbonded reduced column collapses within 3 s of the release: `E_p` drops by more than
+/// 0.1 `E_p0` and the runout passes the removed plate by more than a metre.
+#[test]
+#[cfg_attr(debug_assertions, ignore = "about 1.5 s in release, minutes in debug")]
+fn unbonded_column_collapses() {
+    let mut t = reduced_column(0.0, false);
+    t.collapse_time = 3.0;
+    let run = run_column(&t).unwrap();
+    let last = run.last().unwrap();
+    assert!(last.potential_ratio < 0.9, "{last:?}");
+    assert!(last.runout > t.width + 1.0, "{last:?}");
+}
+
+/// β_b = 0.1 without melting stands for 3 s after the release: corner displacement below
+/// 5 cm and `E_p` within 1 % of `E_p0`.
+#[test]
+#[cfg_attr(debug_assertions, ignore = "about 1.5 s in release, minutes in debug")]
+fn bonded_column_stands() {
+    let mut t = reduced_column(0.1, false);
+    t.collapse_time = 3.0;
+    let run = run_column(&t).unwrap();
+    let last = run.last().unwrap();
+    assert!(last.corner_displacement <= 0.05, "{last:?}");
+    assert!((1.0 - last.potential_ratio).abs() <= 0.01, "{last:?}");
+}
+
+/// The quick verification case passes every row (release only; it runs three reduced
+/// columns, about 10 s).
+#[test]
+#[cfg_attr(debug_assertions, ignore = "about 10 s in release")]
+fn quick_verification_case_passes() {
+    let case = thm_coupling::verification::cases()
+        .into_iter()
+        .find(|c| c.name == "coupling/mpm_dem_column_quick")
+        .unwrap();
+    let out = (case.run)().unwrap();
+    for r in &out.rows {
+        eprintln!(
+            "{} | {} | {:.6e} | {:.3e} | {}",
+            r.quantity,
+            r.unit,
+            r.measured,
+            r.reference,
+            if r.pass { "pass" } else { "FAIL" }
+        );
+    }
+    for n in &out.notes {
+        eprintln!("{n}");
+    }
+    assert!(out.passed());
+}
