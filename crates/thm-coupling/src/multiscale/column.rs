@@ -679,8 +679,13 @@ impl ColumnModel {
 
     /// Intact bonds on the heated half and on the other.
     pub fn intact_bonds(&self) -> [u64; 2] {
+        self.intact_bonds_of(&self.state)
+    }
+
+    /// Intact bonds of `state` on the heated half and on the other.
+    pub fn intact_bonds_of(&self, state: &MpmState<RvePoint>) -> [u64; 2] {
         let mut n = [0u64; 2];
-        for (r, heated) in self.state.material.iter().zip(&self.heated_half) {
+        for (r, heated) in state.material.iter().zip(&self.heated_half) {
             n[usize::from(!*heated)] += r.rve.contacts.intact_bond_count() as u64;
         }
         n
@@ -688,7 +693,12 @@ impl ColumnModel {
 
     /// `E_p = Σ m g h` and `E_k = Σ ½ m v²` (J/m).
     pub fn energies(&self) -> (f64, f64) {
-        let pts = &self.state.points;
+        self.energies_of(&self.state)
+    }
+
+    /// `E_p` and `E_k` of `state` (J/m).
+    pub fn energies_of(&self, state: &MpmState<RvePoint>) -> (f64, f64) {
+        let pts = &state.points;
         let (mut ep, mut ek) = (0.0, 0.0);
         for ((m, x), v) in pts.mass.iter().zip(&pts.position).zip(&pts.velocity) {
             ep += m * self.test.gravity * x[1];
@@ -699,7 +709,12 @@ impl ColumnModel {
 
     /// Stored heat `Σ m c (T − T₀)` (J/m).
     pub fn stored_heat(&self) -> f64 {
-        let pts = &self.state.points;
+        self.stored_heat_of(&self.state)
+    }
+
+    /// Stored heat of `state` (J/m).
+    pub fn stored_heat_of(&self, state: &MpmState<RvePoint>) -> f64 {
+        let pts = &state.points;
         let t0 = self.test.initial_temperature;
         pts.mass
             .iter()
@@ -781,6 +796,22 @@ impl ColumnModel {
         Ok(())
     }
 
+    /// The smallest time-step limit of B-Eqs. 30–31 over the points of the current state
+    /// (s), with the RVEs' wave moduli.
+    pub fn time_step_limit(&self) -> f64 {
+        use thm_mpm::BatchConstitutive;
+        let material = if self.totals.released {
+            &self.collapse_material
+        } else {
+            &self.settle_material
+        };
+        self.settle_mpm
+            .time_step_limits_with(&self.state.points, |i| {
+                material.wave_modulus(&self.state.material[i])
+            })
+            .min()
+    }
+
     /// Whether the run is over.
     pub fn finished(&self) -> bool {
         self.state.step >= self.test.steps()
@@ -788,9 +819,14 @@ impl ColumnModel {
 
     /// The history row of the current state.
     pub fn record(&self) -> ColumnRecord {
-        let pts = &self.state.points;
-        let (ep, ek) = self.energies();
-        let tot = &self.totals;
+        self.record_of(&self.state, &self.totals)
+    }
+
+    /// The history row of `state` with running sums `totals`.
+    pub fn record_of(&self, state: &MpmState<RvePoint>, totals: &ColumnTotals) -> ColumnRecord {
+        let pts = &state.points;
+        let (ep, ek) = self.energies_of(state);
+        let tot = totals;
         let ep0 = if tot.released {
             tot.potential_energy_at_release
         } else {
@@ -803,7 +839,7 @@ impl ColumnModel {
         } else {
             0.0
         };
-        let intact = self.intact_bonds();
+        let intact = self.intact_bonds_of(state);
         let broken = if tot.released {
             [
                 tot.bonds_installed[0].saturating_sub(intact[0]),
@@ -812,7 +848,7 @@ impl ColumnModel {
         } else {
             [0, 0]
         };
-        let stored = self.stored_heat();
+        let stored = self.stored_heat_of(state);
         let residual = if tot.heat_scale > 0.0 {
             (stored - tot.plate_heat - tot.source_heat) / tot.heat_scale
         } else {
@@ -830,9 +866,8 @@ impl ColumnModel {
             runout = runout.max(pts.position[p][0] + pts.half_size[p][0]);
         }
         ColumnRecord {
-            time: self.state.time,
-            time_after_release: self.state.time
-                - self.test.settle_steps() as f64 * self.test.time_step,
+            time: state.time,
+            time_after_release: state.time - self.test.settle_steps() as f64 * self.test.time_step,
             potential_energy: ep,
             kinetic_energy: ek,
             potential_ratio: ep / ep0,

@@ -3,6 +3,7 @@
 pub mod dem_uniaxial_tension_bar;
 pub mod lumped_cooling;
 pub mod mpm_dem_biaxial;
+pub mod mpm_dem_column;
 pub mod mpm_dem_rod;
 pub mod mpm_dem_square;
 pub mod mpm_semi_infinite_bar;
@@ -15,7 +16,7 @@ use super::error::{ConfigError, RunError};
 use super::scenario::{self, DriveOptions, Outcome, Scenario, drive};
 
 /// The `kind` tags.
-const KINDS: [&str; 7] = [
+const KINDS: [&str; 8] = [
     lumped_cooling::LumpedCooling::KIND,
     mpm_dem_rod::MpmDemRod::KIND,
     mpm_dem_square::MpmDemSquare::KIND,
@@ -23,6 +24,7 @@ const KINDS: [&str; 7] = [
     dem_uniaxial_tension_bar::DemTensionBar::KIND,
     pore_scale_bar::PoreScaleBar::KIND,
     mpm_dem_biaxial::MpmDemBiaxial::KIND,
+    mpm_dem_column::MpmDemColumn::KIND,
 ];
 
 /// The `kind` tags, for error messages.
@@ -57,6 +59,9 @@ pub fn validate(doc: &ScenarioDocument) -> Result<(), ConfigError> {
         mpm_dem_biaxial::MpmDemBiaxial::KIND => {
             scenario::validate::<mpm_dem_biaxial::MpmDemBiaxial>(doc)
         }
+        mpm_dem_column::MpmDemColumn::KIND => {
+            scenario::validate::<mpm_dem_column::MpmDemColumn>(doc)
+        }
         dem_uniaxial_tension_bar::DemTensionBar::KIND => {
             scenario::validate::<dem_uniaxial_tension_bar::DemTensionBar>(doc)
         }
@@ -89,6 +94,9 @@ pub fn dispatch(
         }
         mpm_dem_biaxial::MpmDemBiaxial::KIND => {
             drive::<mpm_dem_biaxial::MpmDemBiaxial>(doc, file, opts)
+        }
+        mpm_dem_column::MpmDemColumn::KIND => {
+            drive::<mpm_dem_column::MpmDemColumn>(doc, file, opts)
         }
         dem_uniaxial_tension_bar::DemTensionBar::KIND => {
             drive::<dem_uniaxial_tension_bar::DemTensionBar>(doc, file, opts)
