@@ -66,7 +66,13 @@
 //! here by [`multiscale::RveMaterial`]: all RVEs of a step are stepped as one batch. The DEM
 //! time rule (`N = ⌈Δt/(c √(s m_min/k_n))⌉` DEM steps per MPM step, density scaling `s`) and
 //! its quasi-static limits (inertial number ≤ 10⁻³, kinetic ≤ 1 % of elastic energy) are in
-//! the module docs, with the granular rod of B-Sect. 5.2.1 ([`multiscale::rod`]).
+//! the module docs, with the granular rod of B-Sect. 5.2.1 ([`multiscale::rod`]). The paper
+//! cases on it: the rod (B-Sect. 5.2.1), the 2D square (5.2.2, [`multiscale::square`]), the
+//! biaxial test (5.3.1, [`multiscale::biaxial`]) and the melting-induced column collapse
+//! (5.3.3, [`multiscale::column`]: settling under gravity, release of the right plate, a
+//! heating plate, bonds of B-Eqs. 38–40 with and without melting, energies as B-Fig. 20;
+//! cases `coupling/mpm_dem_column_quick` and `coupling/mpm_dem_column`,
+//! `docs/cases/mpm_dem_column.md`).
 //!
 //! ## The paper's bar cases ([`bar`])
 //!

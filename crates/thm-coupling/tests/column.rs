@@ -133,14 +133,11 @@ fn bonded_column_stands() {
     assert!((1.0 - last.potential_ratio).abs() <= 0.01, "{last:?}");
 }
 
-/// The quick verification case passes every row (release only; it runs three reduced
-/// columns, about 10 s).
-#[test]
-#[cfg_attr(debug_assertions, ignore = "about 10 s in release")]
-fn quick_verification_case_passes() {
+/// Runs the verification case `name`, prints its rows and notes, and asserts that it passed.
+fn case_passes(name: &str) {
     let case = thm_coupling::verification::cases()
         .into_iter()
-        .find(|c| c.name == "coupling/mpm_dem_column_quick")
+        .find(|c| c.name == name)
         .unwrap();
     let out = (case.run)().unwrap();
     for r in &out.rows {
@@ -157,4 +154,20 @@ fn quick_verification_case_passes() {
         eprintln!("{n}");
     }
     assert!(out.passed());
+}
+
+/// The quick verification case passes every row (release only; it runs three reduced
+/// columns, about 15 s).
+#[test]
+#[cfg_attr(debug_assertions, ignore = "about 15 s in release")]
+fn quick_verification_case_passes() {
+    case_passes("coupling/mpm_dem_column_quick");
+}
+
+/// The full verification case passes every row (five reduced columns to the paper's times,
+/// about a minute in release; run with `--ignored`).
+#[test]
+#[ignore = "about a minute in release: the full verification case"]
+fn full_verification_case_passes() {
+    case_passes("coupling/mpm_dem_column");
 }

@@ -122,7 +122,21 @@
 //! `coupling/mpm_dem_biaxial_quick` and `coupling/mpm_dem_biaxial`
 //! ([`biaxial_verification`]); `docs/cases/mpm_dem_biaxial.md`.
 //!
-//! Units: SI; the MPM side of the rod, the square and the biaxial test in °C.
+//! ## The column collapse (B-Sect. 5.3.3, [`column`](mod@column))
+//!
+//! A 2 m × 2 m column of RVEs consolidated to 10 kPa settles under gravity between two plates;
+//! the right plate is then removed, the left one held at 50 °C, and bonds of B-Eqs. 38–39
+//! installed at the force-carrying contacts, their strength melting by B-Eq. 40 (`T` read as
+//! the rise above the initial temperature, `T_s = 10 K`) or not. Its module docs give the
+//! choices: 0 °C initially, the settling with a larger PIC fraction, frictionless lateral
+//! plates, the heat entering from the plate read from the grid so that stored heat = plate +
+//! friction heat to round-off, and the reduction of skewed RVE cells in the flow
+//! (`thm_rve::RveState::reduce_cell`). A rank-one fabric conductivity of an RVE dilated in the
+//! flow is kept positive semi-definite within rounding ([`stages::psd_conductivity`]). Cases
+//! `coupling/mpm_dem_column_quick` and `coupling/mpm_dem_column` ([`column_verification`]);
+//! `docs/cases/mpm_dem_column.md`.
+//!
+//! Units: SI; the MPM side of the rod, the square, the biaxial test and the column in °C.
 
 pub mod biaxial;
 pub mod biaxial_verification;
