@@ -173,3 +173,30 @@ fn quick_verification_case_passes() {
 fn full_verification_case_passes() {
     case_passes("coupling/mpm_dem_column");
 }
+
+/// The paper's column (B-Sect. 5.3.3) is a valid set-up: 20 × 20 cells, 1 s of settling and
+/// 20 s after the release at Δt = 10⁻⁴ s; bad fields are refused naming the field.
+#[test]
+fn paper_setup_is_valid_and_bad_fields_name_themselves() {
+    use thm_coupling::multiscale::MultiscaleError;
+    let t = ColumnTest::paper(0.1, true);
+    t.validate().unwrap();
+    assert_eq!(t.steps(), 210_000);
+    assert_eq!(ColumnTest::paper(0.0, false).steps(), 40_000);
+    let field_of = |t: &ColumnTest| match t.validate() {
+        Err(MultiscaleError::InvalidParameter { field, .. }) => field,
+        other => panic!("{other:?}"),
+    };
+    let mut bad = t;
+    bad.bond_strength = -0.1;
+    assert_eq!(field_of(&bad), "bond_strength");
+    let mut bad = t;
+    bad.melting_threshold = 0.0;
+    assert_eq!(field_of(&bad), "melting_threshold");
+    let mut bad = t;
+    bad.height = 3.0;
+    assert_eq!(field_of(&bad), "height");
+    let mut bad = t;
+    bad.pic_fraction = f64::NAN;
+    assert_eq!(field_of(&bad), "pic_fraction");
+}
