@@ -200,3 +200,20 @@ fn paper_setup_is_valid_and_bad_fields_name_themselves() {
     bad.pic_fraction = f64::NAN;
     assert_eq!(field_of(&bad), "pic_fraction");
 }
+
+/// A rank-one fabric conductivity (one heat pipe) whose rounding left `k_xx k_yy < k_xy²` is
+/// made positive semi-definite with `k_xy` changed by a few ulps only; a positive definite
+/// one is unchanged.
+#[test]
+fn rank_one_conductivity_is_kept_positive_semi_definite() {
+    use thm_coupling::multiscale::stages::psd_conductivity;
+    let (a, b) = (0.7_f64, -1.3_f64);
+    let k = [a * a, b * b, a * b * (1.0 + 4.0 * f64::EPSILON)];
+    assert!(k[0] * k[1] < k[2] * k[2]);
+    let p = psd_conductivity(k);
+    assert!(p[0] * p[1] >= p[2] * p[2]);
+    assert_eq!([p[0], p[1]], [k[0], k[1]]);
+    assert!((p[2] - a * b).abs() <= 1e-14 * (a * b).abs());
+    let pd = [2.0, 3.0, 0.5];
+    assert_eq!(psd_conductivity(pd), pd);
+}

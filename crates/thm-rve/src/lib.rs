@@ -81,6 +81,12 @@
 //!     energy balance (boundary work = Δ elastic + Δ kinetic + friction heat) closes only to
 //!     first order in Δt with explicit integration (≈ 4·10⁻⁴ at 0.2 √(m/k_n), tested to
 //!     shrink 4× with Δt/4), not to 10⁻⁹.
+//! 11. *Cells in a flow.* The paper does not say how its periodic cells survive the unbounded
+//!     shear of a flowing material point (B-Sect. 5.3.3). [`RveState::reduce_cell`] replaces a
+//!     skewed basis by a Lagrange–Gauss reduced basis `H U` (`U` unimodular) of the same
+//!     lattice: the packing, its contacts and its stress are unchanged (tested) and the cell
+//!     stays wide enough for the periodic search under shear. Elongation (a cell stretched
+//!     along one axis and thinned along the other) it cannot cure.
 //!
 //! ## Units and validity
 //!
