@@ -104,7 +104,7 @@ fn resumed_across_the_release_is_bitwise_identical() {
     let dir = scratch("resume");
     let file = short(&dir, "b0.1_melting", |t| {
         let t = edit(t, "cells = 4", "cells = 2");
-        edit(t, "disks = 60", "disks = 30")
+        edit(t, "disks = 100", "disks = 30")
     });
     let full = dir.join("full");
     let o = run(&file, &full, None);
@@ -143,7 +143,7 @@ fn bad_column_values_name_their_key() {
             "column.bond_strength",
         ),
         ("cells = 4", "cells = 0", "column.cells"),
-        ("disks = 60", "disks = 5", "column.disks"),
+        ("disks = 100", "disks = 5", "column.disks"),
         (
             "density_scaling = 1e5",
             "density_scaling = 0.5",
