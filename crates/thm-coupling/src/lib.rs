@@ -68,7 +68,9 @@
 //! its quasi-static limits (inertial number ≤ 10⁻³, kinetic ≤ 1 % of elastic energy) are in
 //! the module docs, with the granular rod of B-Sect. 5.2.1 ([`multiscale::rod`]). The paper
 //! cases on it: the rod (B-Sect. 5.2.1), the 2D square (5.2.2, [`multiscale::square`]), the
-//! biaxial test (5.3.1, [`multiscale::biaxial`]) and the melting-induced column collapse
+//! biaxial test (5.3.1, [`multiscale::biaxial`]), its bonded form of B-Fig. 18
+//! ([`multiscale::biaxial::BiaxialTest::bonded`], cases `coupling/mpm_dem_biaxial_bonded_quick`
+//! and `coupling/mpm_dem_biaxial_bonded`) and the melting-induced column collapse
 //! (5.3.3, [`multiscale::column`]: settling under gravity, release of the right plate, a
 //! heating plate, bonds of B-Eqs. 38–40 with and without melting, energies as B-Fig. 20;
 //! cases `coupling/mpm_dem_column_quick` and `coupling/mpm_dem_column`,
@@ -124,8 +126,9 @@
 //! Π(1 + α_exp ΔT_avg) to 10⁻¹⁴ through breakage and remeshing).
 //!
 //! The MPM×DEM scheme with the granular rod of B-Sect. 5.2.1 (also as the `thm run` kind
-//! `mpm_dem_rod`) and the square of B-Sect. 5.2.2 (also as `mpm_dem_square`); not yet
-//! here: the cases of B-Sect. 5.3 and their `thm run` kinds.
+//! `mpm_dem_rod`), the square of B-Sect. 5.2.2 (`mpm_dem_square`), the biaxial tests of
+//! B-Sect. 5.3.1 and B-Fig. 18 (`mpm_dem_biaxial`) and the column collapse of B-Sect. 5.3.3
+//! (`mpm_dem_column`); not yet here: the silo discharge of B-Sect. 5.3.2.
 //!
 //! ## Verification ([`verification::cases`])
 //!

@@ -96,3 +96,37 @@ fn bad_parameters_name_the_field() {
     let e = BiaxialModel::new(&t).unwrap_err().to_string();
     assert!(e.contains("`height`"), "{e}");
 }
+
+/// B-Fig. 18's bonded specimen: bonds only at the contacts that carry force after the
+/// consolidation (and at every one of them), the same packing as without bonds, and a bad
+/// bond strength names its field.
+#[test]
+fn bonds_are_installed_at_the_force_carrying_contacts_only() {
+    let mut plain = tiny(10);
+    plain.compaction = Compaction::Loose;
+    plain.consolidation_friction = Compaction::Loose.consolidation_friction();
+    plain.confining_stress = 25e3;
+    let mut bonded = plain;
+    bonded.bond_strength = 0.02;
+    let (_, a, _) = thm_coupling::multiscale::biaxial::biaxial_packing(&plain).unwrap();
+    let (p, b, _) = thm_coupling::multiscale::biaxial::biaxial_packing(&bonded).unwrap();
+    assert!(p.contact.thermal_bond.is_some());
+    assert_eq!(a.disks.position, b.disks.position);
+    let mut bonds = 0;
+    for ((ha, hb), f) in a
+        .contacts
+        .history
+        .iter()
+        .zip(&b.contacts.history)
+        .zip(&b.contacts.force_on_b)
+    {
+        assert_eq!(ha.bond, thm_dem::BondState::None);
+        let carries = *f != thm_dem::Vec2::ZERO;
+        assert_eq!(hb.bond == thm_dem::BondState::Intact, carries);
+        bonds += usize::from(carries);
+    }
+    assert!(bonds > b.disks.len(), "{bonds} bonds");
+    bonded.bond_strength = -0.01;
+    let e = BiaxialModel::new(&bonded).unwrap_err().to_string();
+    assert!(e.contains("bond_strength"), "{e}");
+}

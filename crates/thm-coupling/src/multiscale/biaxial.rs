@@ -75,6 +75,10 @@ use super::error::MultiscaleError;
 use super::material::{RveMaterial, RvePoint};
 use super::params::{DemTimeRule, MultiscaleParams, QuasiStaticLimits};
 
+fn default_bond_shear_ratio() -> f64 {
+    0.5
+}
+
 /// The initial state of the specimen (B-Sect. 5.3.1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -158,6 +162,15 @@ pub struct BiaxialTest {
     pub rve: RveParams,
     /// The DEM time rule.
     pub dem_time: DemTimeRule,
+    /// Bond strength coefficient β_b of B-Eq. 38 (`F_nb = β_b k_n R`); 0: no bonds. Bonds
+    /// are installed after the consolidation at every contact carrying force, and do not
+    /// melt (B-Fig. 18: the bonded biaxial tests).
+    #[serde(default)]
+    pub bond_strength: f64,
+    /// μ_b of B-Eq. 39: the shear force at breakage over the normal breakage force; the
+    /// paper: 0.5.
+    #[serde(default = "default_bond_shear_ratio")]
+    pub bond_shear_ratio: f64,
     /// Quasi-static limits enforced after every step (`None`: measured, not enforced).
     #[serde(default)]
     pub quasi_static: Option<QuasiStaticLimits>,
@@ -197,7 +210,21 @@ impl BiaxialTest {
                 density_scaling: 1e4,
             },
             quasi_static: None,
+            bond_strength: 0.0,
+            bond_shear_ratio: 0.5,
         }
+    }
+
+    /// A bonded biaxial test of B-Fig. 18 at the paper's size: the RVEs consolidated to
+    /// `confining_stress` with μ = 0.5 (the loose protocol of B-Sect. 5.3.1; the paper's
+    /// "medium-dense" void ratios 0.251, 0.240 and 0.232 at 10, 25 and 50 kPa lie near its
+    /// 0.236), bonds of strength `bond_strength` (β_b, B-Eq. 38; μ_b = 0.5) installed at
+    /// every contact carrying force after the consolidation, sheared with μ = 0.5 to 20 %.
+    pub fn bonded(confining_stress: f64, bond_strength: f64) -> Self {
+        let mut t = Self::paper(Compaction::Loose);
+        t.confining_stress = confining_stress;
+        t.bond_strength = bond_strength;
+        t
     }
 
     /// The paper's test at a reduced size: `cells` (keeping the 1 × 2 aspect with square
@@ -290,6 +317,14 @@ impl BiaxialTest {
                 "[0, 10]",
             ),
             ("shear_friction", self.shear_friction, 0.0, 10.0, "[0, 10]"),
+            ("bond_strength", self.bond_strength, 0.0, 10.0, "[0, 10]"),
+            (
+                "bond_shear_ratio",
+                self.bond_shear_ratio,
+                1e-6,
+                1e6,
+                "[1e-6, 1e6]",
+            ),
             (
                 "initial_temperature",
                 self.initial_temperature,
@@ -374,6 +409,18 @@ pub fn biaxial_packing(
         *v = thm_dem::Vec3::ZERO;
     }
     state.friction_heat_total = 0.0;
+    // B-Sect. 5.3.3 (B-Fig. 18): bonds only after the consolidation, at the contacts that
+    // carry force; they do not melt in these tests.
+    if t.bond_strength > 0.0 {
+        p.contact.thermal_bond = Some(thm_dem::ThermalBondParams {
+            strength_coefficient: t.bond_strength,
+            threshold_temperature_rise: f64::MAX,
+            reference_temperature: p.reference_temperature,
+            shear_ratio: t.bond_shear_ratio,
+        });
+        p.validate().map_err(MultiscaleError::RveSetup)?;
+        state.install_bonds();
+    }
     let k1 = measure::conductivity(&state, &p);
     p.thermal_resistance = 0.5 * (k1.at(0, 0) + k1.at(1, 1)) / t.conductivity;
     p.contact.friction_coefficient = t.shear_friction;

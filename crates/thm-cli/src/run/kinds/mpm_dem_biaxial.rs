@@ -16,6 +16,7 @@
 use serde::{Deserialize, Serialize};
 use thm_coupling::multiscale::biaxial::{BiaxialModel, BiaxialTest, BiaxialTotals, Compaction};
 use thm_coupling::multiscale::{RvePoint, biaxial::BiaxialRecord};
+use thm_dem::BondState;
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 use thm_mpm::{BatchConstitutive, MpmState};
 
@@ -51,6 +52,14 @@ pub struct BiaxialParams {
     pub plate_speed: Quantity<Velocity>,
     /// Initial uniform temperature (not stated in the paper; 20 °C).
     pub initial_temperature: Quantity<Temperature>,
+    /// Bond strength coefficient β_b of B-Eq. 38, in [0, 10] (0: no bonds; B-Fig. 18: 0.01,
+    /// 0.02); bonds are installed after the consolidation at the contacts carrying force and
+    /// do not melt.
+    #[serde(default)]
+    pub bond_strength: f64,
+    /// μ_b of B-Eq. 39 (the paper: 0.5), in [1e-6, 1e6].
+    #[serde(default = "half")]
+    pub bond_shear_ratio: f64,
     /// Material points whose RVEs are written at every frame (disks, contact forces, cell;
     /// series `rve_K_disks`, `rve_K_contacts`, `rve_K_cell`): the point nearest to each
     /// `[x, y]` (m) of the specimen as built, at most 16, each inside it. Default: none.
@@ -60,6 +69,10 @@ pub struct BiaxialParams {
 
 fn one() -> u64 {
     1
+}
+
+fn half() -> f64 {
+    0.5
 }
 
 /// The kind's sections of the scenario file.
@@ -96,6 +109,8 @@ pub struct MpmDemBiaxial {
     kinetic: Vec<f64>,
     /// Indices of the tracked points.
     tracked: Vec<usize>,
+    /// Bonds installed in all RVEs after the consolidation.
+    bonds_installed: usize,
     rve_frames: RveFrames,
 }
 
@@ -114,6 +129,21 @@ impl MpmDemBiaxial {
     fn record(&self, state: &State) -> BiaxialRecord {
         self.model.record_of(&state.mpm, &state.totals)
     }
+}
+
+/// Intact bonds over all RVEs.
+fn intact_bonds(mpm: &MpmState<RvePoint>) -> usize {
+    mpm.material
+        .iter()
+        .map(|p| {
+            p.rve
+                .contacts
+                .history
+                .iter()
+                .filter(|h| h.bond == BondState::Intact)
+                .count()
+        })
+        .sum()
 }
 
 fn check_range(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), ConfigError> {
@@ -182,6 +212,10 @@ impl Scenario for MpmDemBiaxial {
             b.disks,
             b.density_scaling,
         );
+        check_range("biaxial.bond_strength", b.bond_strength, 0.0, 10.0)?;
+        check_range("biaxial.bond_shear_ratio", b.bond_shear_ratio, 1e-6, 1e6)?;
+        t.bond_strength = b.bond_strength;
+        t.bond_shear_ratio = b.bond_shear_ratio;
         t.seed = b.seed;
         t.confining_stress = b.confining_stress.si();
         t.plate_speed = b.plate_speed.si();
@@ -246,6 +280,7 @@ impl Scenario for MpmDemBiaxial {
             tracked.push(nearest);
         }
         let n = model.state.points.len();
+        let bonds_installed = intact_bonds(&model.state);
         let state = State {
             mpm: model.state.clone(),
             totals: model.totals,
@@ -260,6 +295,7 @@ impl Scenario for MpmDemBiaxial {
                 deviatoric: vec![0.0; n],
                 kinetic: vec![0.0; n],
                 tracked,
+                bonds_installed,
                 rve_frames: RveFrames::default(),
             },
             state,
@@ -310,6 +346,7 @@ impl Scenario for MpmDemBiaxial {
             Column::new("largest_rve_inertial_number", "-"),
             Column::new("largest_rve_kinetic_ratio", "-"),
             Column::new("rves_without_pressure", "-"),
+            Column::new("intact_bonds", "-"),
         ]
     }
 
@@ -332,6 +369,7 @@ impl Scenario for MpmDemBiaxial {
             r.max_inertial_number,
             r.max_kinetic_ratio,
             r.rves_without_pressure as f64,
+            intact_bonds(&state.mpm) as f64,
         ]);
     }
 
@@ -435,6 +473,16 @@ impl Scenario for MpmDemBiaxial {
                 "J/m",
                 r.heat_generated,
                 Some(r.friction_work_upscaled),
+            ),
+            row(
+                "broken_bond_fraction (0 without bonds)",
+                "-",
+                if self.bonds_installed == 0 {
+                    0.0
+                } else {
+                    1.0 - intact_bonds(&state.mpm) as f64 / self.bonds_installed as f64
+                },
+                None,
             ),
             row(
                 "consolidated void ratio (reference: the paper's)",
