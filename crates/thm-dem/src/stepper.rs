@@ -111,13 +111,14 @@ pub struct Stepper<L: ContactLaw> {
     wall_start: Vec<u32>,
     cursor: Vec<u32>,
     index_key: Option<(u64, usize, usize, usize)>,
-    /// Whether each contact carried force in this step: the gather skips the spill entries
-    /// of the others (not written in this step). The report's `active` flag again, one byte
-    /// per contact, because the gather reads it at random (a 32-byte report per read would
-    /// cost a cache line).
+    /// Whether each contact carried force at its last evaluation (the report's `active` flag
+    /// again, one byte per contact): the contact pass zeroes a contact's spill entry when it
+    /// stops carrying force.
     active: Vec<u8>,
     /// Force on B and torque on B of a contact whose B lies in a later block than its A,
-    /// written in the step when it carried force.
+    /// written in the step when it carried force and zeroed when it stops carrying force (and
+    /// all zeroed when the contact index is rebuilt), so that the gather adds every entry
+    /// without testing `active`: an inactive contact's entry is zero.
     spill: Vec<[Vec3; 2]>,
     /// Per particle: the sum of the forces (torques) of the contacts that its block owns, in
     /// contact order (see [`BlockPass::block`]).
@@ -342,6 +343,9 @@ impl<L: ContactLaw> Stepper<L> {
             entry[cursor[b] as usize] = k as u32;
             cursor[b] += 1;
         }
+        // The entries follow the new contact indices: none carries an old force.
+        self.spill.clear();
+        self.spill.resize(state.contacts.len(), [Vec3::ZERO; 2]);
         // Every pair is looked at in the next step.
         self.quiet_below.clear();
         self.quiet_below
@@ -472,7 +476,7 @@ impl<L: ContactLaw> Stepper<L> {
         } = &mut state.particles;
         let planar = kinematics.is_planar();
         let n = position.len();
-        let (spill, active) = (&self.spill[..], &self.active[..]);
+        let spill = &self.spill[..];
         let (b_start, b_entry) = (&self.b_start[..], &self.b_entry);
         let (block_force, block_torque) = (&self.block_force[..], &self.block_torque[..]);
         let (touched, stamp) = (&self.touched[..], self.stamp);
@@ -519,12 +523,12 @@ impl<L: ContactLaw> Stepper<L> {
                 let mut fi = Vec3::ZERO;
                 let mut ti = Vec3::ZERO;
                 if !(sparse && touched[i].load(Relaxed) != stamp) {
+                    // No test of the contact's activity: an inactive contact's spill entry
+                    // is zero (see `spill`).
                     for &k in &b_entry[b_range[0] as usize..b_range[1] as usize] {
-                        let k = k as usize;
-                        if active[k] != 0 {
-                            fi += spill[k][0];
-                            ti += spill[k][1];
-                        }
+                        let [f, t] = spill[k as usize];
+                        fi += f;
+                        ti += t;
                     }
                 }
                 fi += *f_block;
@@ -743,6 +747,9 @@ impl<L: ContactLaw> BlockPass<'_, L> {
             // cleared one (any evaluation sets the normal; a bond installed meanwhile or a
             // restored state is seen at once).
             if drift < *q && h.bond != BondState::Intact && is_zero(h.normal) {
+                if *on != 0 {
+                    *sp = [Vec3::ZERO; 2];
+                }
                 *on = 0;
                 continue;
             }
@@ -765,6 +772,9 @@ impl<L: ContactLaw> BlockPass<'_, L> {
                     if reach > 0.0 {
                         *q = 0.5 * (d2.sqrt() - reach - 1e-9 * reach) - drift;
                     }
+                    if *on != 0 {
+                        *sp = [Vec3::ZERO; 2];
+                    }
                     *on = 0;
                     continue;
                 }
@@ -778,6 +788,9 @@ impl<L: ContactLaw> BlockPass<'_, L> {
             };
             let r = self.law.respond(&input, &kin, h);
             *rep = ContactReport::from(&r);
+            if *on != 0 && !r.active {
+                *sp = [Vec3::ZERO; 2];
+            }
             *on = u8::from(r.active);
             broke |= r.broke.is_some();
             if r.active {

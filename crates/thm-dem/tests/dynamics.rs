@@ -647,3 +647,63 @@ fn sparse_contacts_conserve_momentum_and_give_identical_bits() {
         assert_eq!(state_bits(&a), state_bits(&b), "{threads} threads");
     }
 }
+
+#[test]
+fn a_contact_across_particle_blocks_leaves_no_force_once_it_opens() {
+    // Particles 0 and 700 lie in different blocks of the contact pass (512 particles each), so
+    // the force on 700 reaches it through the gather of the later block. They collide head
+    // on and separate; from then on 700 must fly at constant velocity (no gravity, no damping,
+    // nothing else near it). The other spheres form bonded pairs at rest, far away, so that
+    // most listed contacts stay active and the gather reads every spill entry.
+    let r = 1e-3;
+    let n = 1100;
+    let mut centres: Vec<Vec3> = (0..n)
+        .map(|i| {
+            let pair = (i as f64 / 2.0).floor();
+            let side = if i % 2 == 0 { 0.0 } else { 2.0 * r };
+            Vec3::new(side, 1.0 + 10.0 * r * pair, 0.0)
+        })
+        .collect();
+    centres[0] = Vec3::ZERO;
+    centres[700] = Vec3::new(2.0 * r + 1e-5, 0.0, 0.0);
+    // 1 lost its partner 0: keep it alone, far from everything.
+    centres[1] = Vec3::new(-1.0, 0.0, 0.0);
+    centres[701] = Vec3::new(1.0, 0.0, 0.0);
+    let radii = vec![r; n];
+    let particles =
+        ParticleState::new(Kinematics::Spheres3d, 2600.0, 293.15, &centres, &radii).unwrap();
+    let mut state = DemState::new(particles, vec![]);
+    state.install_bonds(1e-9).unwrap();
+    state.particles.velocity[0] = Vec3::new(0.05, 0.0, 0.0);
+    state.particles.velocity[700] = Vec3::new(-0.05, 0.0, 0.0);
+    let law = table1();
+    let dt = 0.02 * critical_time_step(&state, &law);
+    let mut stepper = Stepper::new(law, stepper_params(dt, 0.0).validate().unwrap());
+    stepper.step(&mut state).unwrap();
+    let bonded = state.contacts.active_count();
+    assert!(
+        4 * bonded > state.contacts.len(),
+        "{bonded} of {}",
+        state.contacts.len()
+    );
+    let pair_active = |s: &DemState| {
+        (0..s.contacts.len()).any(|k| s.contacts.pair[k] == [0, 700] && s.contacts.report[k].active)
+    };
+    let mut touched = false;
+    let mut separated = false;
+    for _ in 0..200_000 {
+        stepper.step(&mut state).unwrap();
+        let active = pair_active(&state);
+        touched |= active;
+        if touched && !active {
+            separated = true;
+            break;
+        }
+    }
+    assert!(separated, "the pair never touched and separated");
+    let v_apart = state.particles.velocity[700];
+    assert!(v_apart.x > 0.04, "rebound: {v_apart:?}");
+    stepper.run(&mut state, 200).unwrap();
+    assert_eq!(state.particles.velocity[700], v_apart);
+    assert_eq!(state.particles.force[700], Vec3::ZERO);
+}
