@@ -1128,7 +1128,10 @@ track = [[0.25, 0.5]]
         );
         let text = BIAXIAL.replace("disks = 30", "disks = 30\nbond_strength = -0.01");
         let err = error_of("mpm_biaxial_bond", &text);
-        assert!(err.contains("biaxial.bond_strength: must be in [0, 10]"), "{err}");
+        assert!(
+            err.contains("biaxial.bond_strength: must be in [0, 10]"),
+            "{err}"
+        );
         let text = BIAXIAL.replace("[[0.25, 0.5]]", "[[0.25, 0.5], [1.5, 0.5]]");
         let err = error_of("mpm_biaxial_track", &text);
         assert!(
