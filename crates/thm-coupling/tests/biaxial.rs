@@ -130,3 +130,26 @@ fn bonds_are_installed_at_the_force_carrying_contacts_only() {
     let e = BiaxialModel::new(&bonded).unwrap_err().to_string();
     assert!(e.contains("bond_strength"), "{e}");
 }
+
+/// The paper's void ratios are attached to the tests that state them and to no other.
+#[test]
+fn paper_void_ratios_follow_the_stated_tests() {
+    assert_eq!(
+        BiaxialTest::paper(Compaction::Dense).paper_void_ratio(),
+        Some(0.165)
+    );
+    assert_eq!(
+        BiaxialTest::paper(Compaction::Loose).paper_void_ratio(),
+        Some(0.236)
+    );
+    for (kpa, e) in [(10.0, 0.251), (25.0, 0.240), (50.0, 0.232)] {
+        assert_eq!(
+            BiaxialTest::bonded(1e3 * kpa, 0.01).paper_void_ratio(),
+            Some(e)
+        );
+    }
+    assert_eq!(BiaxialTest::bonded(7e4, 0.01).paper_void_ratio(), None);
+    let mut dense_low = BiaxialTest::paper(Compaction::Dense);
+    dense_low.confining_stress = 25e3;
+    assert_eq!(dense_low.paper_void_ratio(), None);
+}

@@ -247,6 +247,24 @@ impl BiaxialTest {
         t
     }
 
+    /// The paper's void ratio after the consolidation of this test's packings, where it
+    /// states one: B-Sect. 5.3.1 at 100 kPa (dense 0.165, loose 0.236) and the bonded tests
+    /// of B-Fig. 18 at 10, 25 and 50 kPa (0.251, 0.240, 0.232, B-Sect. 5.3.3).
+    pub fn paper_void_ratio(&self) -> Option<f64> {
+        let at = |kpa: f64| (self.confining_stress - 1e3 * kpa).abs() <= 1e-9 * 1e3 * kpa;
+        if at(100.0) {
+            Some(self.compaction.paper_void_ratio())
+        } else if self.compaction == Compaction::Loose && at(10.0) {
+            Some(0.251)
+        } else if self.compaction == Compaction::Loose && at(25.0) {
+            Some(0.240)
+        } else if self.compaction == Compaction::Loose && at(50.0) {
+            Some(0.232)
+        } else {
+            None
+        }
+    }
+
     /// Cell size `W / nx` (m).
     pub fn cell_size(&self) -> f64 {
         self.width / self.cells[0] as f64

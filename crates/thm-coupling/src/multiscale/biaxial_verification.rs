@@ -478,11 +478,7 @@ fn bonded_full_case() -> Result<CaseOutput, CaseError> {
                     f64::NAN,
                 ));
             } else {
-                let paper = match stress as u64 {
-                    10_000 => 0.251,
-                    25_000 => 0.240,
-                    _ => 0.232,
-                };
+                let paper = t.paper_void_ratio().unwrap_or(f64::NAN);
                 out.rows.push(Row::reported(
                     format!("{name}: consolidated void ratio vs the paper's (400 disks)"),
                     "-",

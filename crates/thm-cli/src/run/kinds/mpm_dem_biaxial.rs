@@ -488,7 +488,7 @@ impl Scenario for MpmDemBiaxial {
                 "consolidated void ratio (reference: the paper's)",
                 "-",
                 self.model.packing.void_ratio,
-                Some(self.model.test.compaction.paper_void_ratio()),
+                self.model.test.paper_void_ratio(),
             ),
         ]
     }
