@@ -10,6 +10,7 @@
 //! (`profiles/*.csv`, see [`profiles`]) and `summary.md` with history and profile plots. A fresh run refuses a folder that already holds a run. Ctrl-C stops after the
 //! current step with a checkpoint; `--resume` continues bit for bit from any checkpoint.
 
+pub mod arrays;
 pub mod config;
 pub mod error;
 pub mod kinds;

@@ -150,4 +150,18 @@ pub enum RunError {
         /// The offending value.
         value: f64,
     },
+    /// New values for a state array between steps were refused.
+    #[error("state array `{array}`: {detail}")]
+    Input {
+        /// The array's name.
+        array: String,
+        /// What is wrong and what is allowed.
+        detail: String,
+    },
+    /// A step was asked of a run that has reached its end time.
+    #[error("the run has reached its end time after {steps} steps; nothing left to step")]
+    Ended {
+        /// Steps of the whole run.
+        steps: u64,
+    },
 }

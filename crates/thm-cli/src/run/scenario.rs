@@ -77,6 +77,24 @@ pub trait Scenario: Sized {
     fn pictures(&self, _state: &Self::State, _time: f64) -> Vec<(String, thm_io::Picture)> {
         Vec::new()
     }
+
+    /// The state's named arrays (positions, temperatures, pressures, stresses), for front
+    /// ends that read the state between steps. Default: none.
+    fn arrays<'s>(&'s self, _state: &'s Self::State) -> Vec<StateArray<'s>> {
+        Vec::new()
+    }
+
+    /// Replaces the values of the writable array `name` between steps (a load, a
+    /// temperature). What is written is part of the state, so a checkpoint keeps it. Errors
+    /// name the array and the allowed range. Default: no writable arrays.
+    fn set_array(
+        &mut self,
+        _state: &mut Self::State,
+        name: &str,
+        _values: &[f64],
+    ) -> Result<(), RunError> {
+        Err(not_writable(name, &[]))
+    }
 }
 
 /// What a checkpoint holds besides the state: enough to refuse a foreign scenario.
@@ -239,182 +257,449 @@ pub fn validate<S: Scenario>(doc: &ScenarioDocument) -> Result<(), ConfigError> 
     build::<S>(doc).map(|_| ())
 }
 
+/// A named array of a run's state, for front ends (the Python module): `rows × columns`
+/// values, row-major, in the unit named.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StateArray<'a> {
+    /// Name, e.g. `sphere_temperature` (file-name safe, unique within a kind).
+    pub name: &'static str,
+    /// Unit of the values, e.g. `K`.
+    pub unit: &'static str,
+    /// Values per row (1 for scalars, 2 or 3 for vectors, 3 for `[xx, yy, xy]` tensors).
+    pub columns: usize,
+    /// The values, borrowed from the state where its layout is already a flat `f64` array.
+    pub values: std::borrow::Cow<'a, [f64]>,
+    /// Whether [`Scenario::set_array`] accepts new values for it between steps.
+    pub writable: bool,
+}
+
+impl<'a> StateArray<'a> {
+    /// A read-only scalar per row, borrowed.
+    pub fn scalar(name: &'static str, unit: &'static str, values: &'a [f64]) -> Self {
+        Self {
+            name,
+            unit,
+            columns: 1,
+            values: std::borrow::Cow::Borrowed(values),
+            writable: false,
+        }
+    }
+
+    /// A read-only row of `N` values per item, borrowed.
+    pub fn rows<const N: usize>(
+        name: &'static str,
+        unit: &'static str,
+        values: &'a [[f64; N]],
+    ) -> Self {
+        Self {
+            name,
+            unit,
+            columns: N,
+            values: std::borrow::Cow::Borrowed(values.as_flattened()),
+            writable: false,
+        }
+    }
+
+    /// The same array, marked writable.
+    pub fn writable(mut self) -> Self {
+        self.writable = true;
+        self
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.values.len() / self.columns.max(1)
+    }
+
+    /// Whether the array has no rows.
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+}
+
+/// Checks new values for a writable array: the length of the current array, and every value
+/// finite and in `[lo, hi]`, or in `(0, hi]` when `lo` is 0 and `above_zero` (temperatures).
+/// Errors name the array, the value's index and the allowed range.
+pub fn check_input(
+    name: &str,
+    values: &[f64],
+    expected_len: usize,
+    (lo, hi): (f64, f64),
+    above_zero: bool,
+    unit: &str,
+) -> Result<(), RunError> {
+    let bad = |detail: String| RunError::Input {
+        array: name.to_string(),
+        detail,
+    };
+    if values.len() != expected_len {
+        return Err(bad(format!(
+            "needs {expected_len} values, got {}",
+            values.len()
+        )));
+    }
+    let ok = |v: f64| v.is_finite() && v >= lo && v <= hi && !(above_zero && v <= 0.0);
+    if let Some(i) = values.iter().position(|v| !ok(*v)) {
+        let open = if above_zero { "(" } else { "[" };
+        return Err(bad(format!(
+            "value {i} must be finite and in {open}{lo}, {hi}] {unit}, got {}",
+            values[i]
+        )));
+    }
+    Ok(())
+}
+
+/// The error for an array name a kind does not accept.
+pub fn not_writable(name: &str, writable: &[&str]) -> RunError {
+    RunError::Input {
+        array: name.to_string(),
+        detail: if writable.is_empty() {
+            "this kind has no writable arrays".into()
+        } else {
+            format!(
+                "not a writable array of this kind; writable: {}",
+                writable
+                    .iter()
+                    .map(|w| format!("`{w}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        },
+    }
+}
+
+/// A run of scenario kind `S` that is stepped from outside: opened (validated, output folder
+/// prepared, resumed if asked), advanced one step at a time on the file's output schedule,
+/// checkpointed on request and finished with its summary. `thm run` ([`drive`]) and the Python
+/// module step the same object, so both write the same files bit for bit.
+pub struct Run<S: Scenario> {
+    common: super::config::Common,
+    file: PathBuf,
+    out: PathBuf,
+    params_text: String,
+    dt: f64,
+    n: u64,
+    start: u64,
+    step: u64,
+    scenario: S,
+    state: S::State,
+    columns: Vec<Column>,
+    history: CsvHistory,
+    series: Vec<VtuSeries>,
+    encoding: thm_io::Encoding,
+    row: Vec<f64>,
+    wall: Instant,
+    last_checkpoint: Option<PathBuf>,
+}
+
+impl<S: Scenario> std::fmt::Debug for Run<S> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Run")
+            .field("kind", &S::KIND)
+            .field("file", &self.file)
+            .field("out", &self.out)
+            .field("step", &self.step)
+            .field("n_steps", &self.n)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<S: Scenario> Run<S> {
+    /// Validates the document, prepares `out` (a fresh run refuses a folder holding a run),
+    /// loads `resume` if given (refusing a checkpoint of another scenario), writes the resolved
+    /// scenario and, on a fresh run, the first history row and frame.
+    pub fn open(
+        doc: ScenarioDocument,
+        file: &Path,
+        out: &Path,
+        resume: Option<&Path>,
+    ) -> Result<Self, RunError> {
+        let config = |error: ConfigError| RunError::Config {
+            path: file.to_path_buf(),
+            error,
+        };
+        let (params, tc, mut scenario, mut state) = build::<S>(&doc).map_err(config)?;
+        let (resolved, params_text) = resolved_toml(&doc, &params)?;
+        prepare_output(out, resume.is_some())?;
+
+        // Resume: the state and step of the checkpoint, checked against this scenario.
+        let mut start = 0u64;
+        if let Some(ckpt) = resume {
+            let saved: RunCheckpoint<S::State> =
+                thm_io::load_checkpoint(ckpt, S::KIND, S::STATE_VERSION)?;
+            let mismatch = |detail: String| RunError::CheckpointMismatch {
+                path: ckpt.to_path_buf(),
+                detail,
+            };
+            if saved.params != params_text {
+                return Err(mismatch(params_difference(&saved.params, &params_text)));
+            }
+            if saved.dt.to_bits() != tc.dt.to_bits() {
+                return Err(mismatch(format!(
+                    "time.step was {} s, now {} s",
+                    saved.dt, tc.dt
+                )));
+            }
+            start = saved.step;
+            state = saved.state;
+            scenario.restore(&state)?;
+        }
+        thm_io::fsutil::write_atomically(&out.join(SCENARIO_FILE), |w| {
+            std::io::Write::write_all(w, resolved.as_bytes())
+        })?;
+
+        let dt = tc.dt;
+        let mut columns = vec![Column::new("time", "s")];
+        columns.extend(scenario.monitor_columns());
+        let history = if resume.is_some() {
+            CsvHistory::resume(&out.join(HISTORY_FILE), &columns, start as f64 * dt)?
+        } else {
+            CsvHistory::create(&out.join(HISTORY_FILE), &columns)?
+        };
+        let encoding: thm_io::Encoding = doc.common.output.encoding.into();
+        let row = Vec::with_capacity(columns.len());
+        let mut run = Self {
+            common: doc.common,
+            file: file.to_path_buf(),
+            out: out.to_path_buf(),
+            params_text,
+            dt,
+            n: tc.n_steps.max(start),
+            start,
+            step: start,
+            scenario,
+            state,
+            columns,
+            history,
+            series: Vec::new(),
+            encoding,
+            row,
+            wall: Instant::now(),
+            last_checkpoint: None,
+        };
+        if start == 0 {
+            run.observe()?;
+            run.history.push(&run.row)?;
+            run.write_frame()?;
+        }
+        run.wall = Instant::now();
+        Ok(run)
+    }
+
+    fn time_of(&self, step: u64) -> f64 {
+        step as f64 * self.dt
+    }
+
+    /// Steps completed (the checkpoint's step after a resume).
+    pub fn steps_done(&self) -> u64 {
+        self.step
+    }
+
+    /// Steps of the whole run.
+    pub fn n_steps(&self) -> u64 {
+        self.n
+    }
+
+    /// The time step \[s\].
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// The stepper (parameters and scratch).
+    pub fn scenario(&self) -> &S {
+        &self.scenario
+    }
+
+    /// The state.
+    pub fn state(&self) -> &S::State {
+        &self.state
+    }
+
+    /// Computes the monitored values into `self.row` and stops on a non-finite one. This is
+    /// the driver's backstop, run at every history row and before every checkpoint; a physics
+    /// checks its own stages every step and reports the exact place and step.
+    fn observe(&mut self) -> Result<(), RunError> {
+        let step = self.step;
+        self.row.clear();
+        self.row.push(self.time_of(step));
+        self.scenario.monitor(&self.state, &mut self.row);
+        if let Some(k) = self.row.iter().position(|v| !v.is_finite()) {
+            return Err(RunError::Unstable {
+                quantity: self.columns[k].header(),
+                place: "monitored quantities".into(),
+                step,
+                time: self.time_of(step),
+                value: self.row[k],
+            });
+        }
+        Ok(())
+    }
+
+    fn write_frame(&mut self) -> Result<(), RunError> {
+        let (step, t) = (self.step, self.time_of(self.step));
+        let (out, encoding, resume_time) = (&self.out, self.encoding, self.time_of(self.start));
+        let resuming = self.start > 0;
+        let series = &mut self.series;
+        self.scenario.frame(
+            &self.state,
+            &mut |name: &str, grid: &UnstructuredGrid<'_>| {
+                let k = match series.iter().position(|s| s.name() == name) {
+                    Some(k) => k,
+                    None => {
+                        let mut s = VtuSeries::new(out, name, encoding)?;
+                        if resuming {
+                            s.retain_until(resume_time)?;
+                        }
+                        series.push(s);
+                        series.len() - 1
+                    }
+                };
+                series[k].write_frame(step, t, grid)
+            },
+        )?;
+        write_profiles(out, step, t, &self.scenario.profiles(&self.state, t))?;
+        super::pictures::write_pictures(out, step, &self.scenario.pictures(&self.state, t))
+    }
+
+    fn save(&mut self) -> Result<PathBuf, RunError> {
+        self.history.flush()?;
+        let path = checkpoint_path(&self.out, self.step);
+        let ckpt = RunCheckpoint {
+            params: self.params_text.clone(),
+            dt: self.dt,
+            step: self.step,
+            state: &self.state,
+        };
+        thm_io::save_checkpoint(&path, S::KIND, S::STATE_VERSION, &ckpt)?;
+        self.last_checkpoint = Some(path.clone());
+        Ok(path)
+    }
+
+    /// Advances one step and records what the output schedule asks for at it (history row,
+    /// frame, checkpoint; all three at the last step). `interrupted` adds a checkpoint.
+    /// Refuses to step past the end time.
+    pub fn advance(&mut self, interrupted: bool) -> Result<(), RunError> {
+        if self.step >= self.n {
+            return Err(RunError::Ended { steps: self.n });
+        }
+        let step = self.step + 1;
+        self.scenario.step(&mut self.state, step, self.dt)?;
+        self.step = step;
+        let output = &self.common.output;
+        let (history_every, frame_every, checkpoint_every) = (
+            output.history_every,
+            output.frame_every,
+            output.checkpoint_every,
+        );
+        let last = step == self.n;
+        let checkpoint_due = checkpoint_every > 0 && step.is_multiple_of(checkpoint_every);
+        // Rows follow the schedule only (an interrupted and resumed run writes the same
+        // rows); on checkpoint steps the values are still checked, so a non-finite state is
+        // never checkpointed.
+        if step.is_multiple_of(history_every) || last {
+            self.observe()?;
+            self.history.push(&self.row)?;
+        } else if checkpoint_due || interrupted {
+            self.observe()?;
+        }
+        if (frame_every > 0 && step.is_multiple_of(frame_every)) || last {
+            self.write_frame()?;
+        }
+        if checkpoint_due || last || interrupted {
+            self.save()?;
+        }
+        Ok(())
+    }
+
+    /// Writes a checkpoint of the current step (after checking the monitored values are
+    /// finite) and returns its path; the run goes on.
+    pub fn checkpoint(&mut self) -> Result<PathBuf, RunError> {
+        self.observe()?;
+        self.save()
+    }
+
+    /// The monitored values now: `(headers "name [unit]", values)`, time first.
+    pub fn monitor(&mut self) -> (Vec<String>, Vec<f64>) {
+        self.row.clear();
+        self.row.push(self.time_of(self.step));
+        self.scenario.monitor(&self.state, &mut self.row);
+        (
+            self.columns.iter().map(Column::header).collect(),
+            self.row.clone(),
+        )
+    }
+
+    /// The state's named arrays (see [`Scenario::arrays`]).
+    pub fn arrays(&self) -> Vec<StateArray<'_>> {
+        self.scenario.arrays(&self.state)
+    }
+
+    /// Replaces the values of writable array `name` (see [`Scenario::set_array`]).
+    pub fn set_array(&mut self, name: &str, values: &[f64]) -> Result<(), RunError> {
+        self.scenario.set_array(&mut self.state, name, values)
+    }
+
+    /// Ends the run: at the end time, the last checkpoint (written at the last step) and the
+    /// summary; before it, a checkpoint of the current step and the summary of an interrupted
+    /// run, which `--resume` continues.
+    pub fn finish(&mut self) -> Result<Outcome, RunError> {
+        let step = self.step;
+        if step < self.n {
+            let checkpoint = match &self.last_checkpoint {
+                Some(c) if *c == checkpoint_path(&self.out, step) => c.clone(),
+                _ => self.checkpoint()?,
+            };
+            self.write_summary(Some(&checkpoint))?;
+            return Ok(Outcome::Interrupted {
+                steps: step,
+                checkpoint,
+            });
+        }
+        self.history.flush()?;
+        let checkpoint = match self.last_checkpoint.clone() {
+            Some(c) => c,
+            None => self.save()?,
+        };
+        self.write_summary(None)?;
+        Ok(Outcome::Finished {
+            steps: step,
+            checkpoint,
+        })
+    }
+
+    fn write_summary(&mut self, interrupted: Option<&Path>) -> Result<(), RunError> {
+        let info = RunInfo {
+            common: &self.common,
+            file: &self.file,
+            steps_done: self.step,
+            n_steps: self.n,
+            dt: self.dt,
+            wall_seconds: self.wall.elapsed().as_secs_f64(),
+            interrupted,
+        };
+        write_summary(&self.out, &info, &self.scenario, &self.state)
+    }
+}
+
 /// Runs scenario kind `S` from a parsed document.
 pub fn drive<S: Scenario>(
     doc: ScenarioDocument,
     file: &Path,
     opts: &DriveOptions<'_>,
 ) -> Result<Outcome, RunError> {
-    let config = |error: ConfigError| RunError::Config {
-        path: file.to_path_buf(),
-        error,
-    };
-    let (params, tc, mut scenario, mut state) = build::<S>(&doc).map_err(config)?;
-    let (resolved, params_text) = resolved_toml(&doc, &params)?;
-    let out = opts.out.as_path();
-    prepare_output(out, opts.resume.is_some())?;
-
-    // Resume: the state and step of the checkpoint, checked against this scenario.
-    let mut start = 0u64;
-    if let Some(ckpt) = &opts.resume {
-        let saved: RunCheckpoint<S::State> =
-            thm_io::load_checkpoint(ckpt, S::KIND, S::STATE_VERSION)?;
-        let mismatch = |detail: String| RunError::CheckpointMismatch {
-            path: ckpt.clone(),
-            detail,
-        };
-        if saved.params != params_text {
-            return Err(mismatch(params_difference(&saved.params, &params_text)));
-        }
-        if saved.dt.to_bits() != tc.dt.to_bits() {
-            return Err(mismatch(format!(
-                "time.step was {} s, now {} s",
-                saved.dt, tc.dt
-            )));
-        }
-        start = saved.step;
-        state = saved.state;
-        scenario.restore(&state)?;
-    }
-    thm_io::fsutil::write_atomically(&out.join(SCENARIO_FILE), |w| {
-        std::io::Write::write_all(w, resolved.as_bytes())
-    })?;
-
-    let output = &doc.common.output;
-    let dt = tc.dt;
-    let n = tc.n_steps.max(start);
-    let time_of = |step: u64| step as f64 * dt;
-    let mut columns = vec![Column::new("time", "s")];
-    columns.extend(scenario.monitor_columns());
-    let mut history = if opts.resume.is_some() {
-        CsvHistory::resume(&out.join(HISTORY_FILE), &columns, time_of(start))?
-    } else {
-        CsvHistory::create(&out.join(HISTORY_FILE), &columns)?
-    };
-    let mut series: Vec<VtuSeries> = Vec::new();
-    let encoding: thm_io::Encoding = output.encoding.into();
-    let resuming = opts.resume.is_some();
-    let mut row = Vec::with_capacity(columns.len());
-
-    // Computes the monitored values and stops on a non-finite one. This is the driver's
-    // backstop, run at every history row and before every checkpoint; a physics checks its own
-    // stages every step and reports the exact place and step.
-    let observe =
-        |scenario: &S, state: &S::State, step: u64, row: &mut Vec<f64>| -> Result<(), RunError> {
-            row.clear();
-            row.push(time_of(step));
-            scenario.monitor(state, row);
-            if let Some(k) = row.iter().position(|v| !v.is_finite()) {
-                return Err(RunError::Unstable {
-                    quantity: columns[k].header(),
-                    place: "monitored quantities".into(),
-                    step,
-                    time: time_of(step),
-                    value: row[k],
-                });
-            }
-            Ok(())
-        };
-    let mut write_frame = |scenario: &mut S, state: &S::State, step: u64| -> Result<(), RunError> {
-        let t = time_of(step);
-        scenario.frame(state, &mut |name: &str, grid: &UnstructuredGrid<'_>| {
-            let k = match series.iter().position(|s| s.name() == name) {
-                Some(k) => k,
-                None => {
-                    let mut s = VtuSeries::new(out, name, encoding)?;
-                    if resuming {
-                        s.retain_until(time_of(start))?;
-                    }
-                    series.push(s);
-                    series.len() - 1
-                }
-            };
-            series[k].write_frame(step, t, grid)
-        })?;
-        write_profiles(out, step, t, &scenario.profiles(state, t))?;
-        super::pictures::write_pictures(out, step, &scenario.pictures(state, t))
-    };
-    let save = |state: &S::State, step: u64| -> Result<PathBuf, RunError> {
-        let path = checkpoint_path(out, step);
-        let ckpt = RunCheckpoint {
-            params: params_text.clone(),
-            dt,
-            step,
-            state,
-        };
-        thm_io::save_checkpoint(&path, S::KIND, S::STATE_VERSION, &ckpt)?;
-        Ok(path)
-    };
-
-    if start == 0 {
-        observe(&scenario, &state, 0, &mut row)?;
-        history.push(&row)?;
-        write_frame(&mut scenario, &state, 0)?;
-    }
-    let wall = Instant::now();
-    let mut progress = ProgressDisplay::new(opts.progress, start, n, dt);
-    let mut last_checkpoint = None;
-    for step in start + 1..=n {
-        scenario.step(&mut state, step, dt)?;
-        let last = step == n;
-        let checkpoint_due = output.checkpoint_every > 0 && step % output.checkpoint_every == 0;
+    let mut run = Run::<S>::open(doc, file, &opts.out, opts.resume.as_deref())?;
+    let mut progress = ProgressDisplay::new(opts.progress, run.start, run.n, run.dt);
+    while run.steps_done() < run.n_steps() {
         let interrupted = opts.interrupt.load(Ordering::Relaxed);
-        // Rows follow the schedule only (an interrupted and resumed run writes the same
-        // rows); on checkpoint steps the values are still checked, so a non-finite state is
-        // never checkpointed.
-        if step % output.history_every == 0 || last {
-            observe(&scenario, &state, step, &mut row)?;
-            history.push(&row)?;
-        } else if checkpoint_due || interrupted {
-            observe(&scenario, &state, step, &mut row)?;
-        }
-        if (output.frame_every > 0 && step % output.frame_every == 0) || last {
-            write_frame(&mut scenario, &state, step)?;
-        }
-        if checkpoint_due || last || interrupted {
-            history.flush()?;
-            last_checkpoint = Some(save(&state, step)?);
-        }
-        progress.update(step);
-        if interrupted && !last {
+        run.advance(interrupted)?;
+        progress.update(run.steps_done());
+        if interrupted && run.steps_done() < run.n_steps() {
             progress.finish();
-            let checkpoint = last_checkpoint.unwrap_or_default();
-            let info = RunInfo {
-                common: &doc.common,
-                file,
-                steps_done: step,
-                n_steps: n,
-                dt,
-                wall_seconds: wall.elapsed().as_secs_f64(),
-                interrupted: Some(&checkpoint),
-            };
-            write_summary(out, &info, &scenario, &state)?;
-            return Ok(Outcome::Interrupted {
-                steps: step,
-                checkpoint,
-            });
+            return run.finish();
         }
     }
     progress.finish();
-    history.flush()?;
-    let checkpoint = match last_checkpoint {
-        Some(c) => c,
-        None => save(&state, n)?,
-    };
-    let info = RunInfo {
-        common: &doc.common,
-        file,
-        steps_done: n,
-        n_steps: n,
-        dt,
-        wall_seconds: wall.elapsed().as_secs_f64(),
-        interrupted: None,
-    };
-    write_summary(out, &info, &scenario, &state)?;
-    Ok(Outcome::Finished {
-        steps: n,
-        checkpoint,
-    })
+    run.finish()
 }
 
 /// A progress bar on a terminal; plain lines every 10 % (at most every few seconds) otherwise.

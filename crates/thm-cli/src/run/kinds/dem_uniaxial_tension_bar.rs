@@ -297,6 +297,20 @@ impl Scenario for DemTensionBar {
     type Params = Params;
     type State = State;
 
+    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::run::scenario::StateArray<'s>> {
+        crate::run::arrays::sphere_arrays(&state.dem.particles)
+    }
+
+    fn set_array(&mut self, state: &mut State, name: &str, values: &[f64]) -> Result<(), RunError> {
+        if crate::run::arrays::set_sphere_force(&mut state.dem.particles, name, values)? {
+            return Ok(());
+        }
+        Err(crate::run::scenario::not_writable(
+            name,
+            &["sphere_external_force"],
+        ))
+    }
+
     fn init(p: &Params, time: &TimeControl) -> Result<(Self, State), ConfigError> {
         let m = &p.material;
         let density = m.density.positive("material.density")?;

@@ -126,6 +126,34 @@ impl Scenario for LumpedCooling {
     type Params = Params;
     type State = State;
 
+    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::run::scenario::StateArray<'s>> {
+        use crate::run::scenario::StateArray;
+        vec![
+            StateArray::rows("sphere_position", "m", &self.position),
+            StateArray::scalar("sphere_radius", "m", &self.radius),
+            StateArray::scalar("sphere_temperature", "K", &state.temperature).writable(),
+        ]
+    }
+
+    fn set_array(&mut self, state: &mut State, name: &str, values: &[f64]) -> Result<(), RunError> {
+        if name != "sphere_temperature" {
+            return Err(crate::run::scenario::not_writable(
+                name,
+                &["sphere_temperature"],
+            ));
+        }
+        crate::run::scenario::check_input(
+            name,
+            values,
+            state.temperature.len(),
+            (0.0, crate::run::arrays::MAX_TEMPERATURE),
+            true,
+            "K",
+        )?;
+        state.temperature.copy_from_slice(values);
+        Ok(())
+    }
+
     fn init(p: &Params, time: &TimeControl) -> Result<(Self, State), ConfigError> {
         let pp = &p.particles;
         let [nx, ny] = pp.lattice;

@@ -9,11 +9,11 @@ pub mod mpm_dem_square;
 pub mod mpm_semi_infinite_bar;
 pub mod pore_scale_bar;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::config::ScenarioDocument;
 use super::error::{ConfigError, RunError};
-use super::scenario::{self, DriveOptions, Outcome, Scenario, drive};
+use super::scenario::{self, DriveOptions, Outcome, Run, Scenario, StateArray, drive};
 
 /// The `kind` tags.
 const KINDS: [&str; 8] = [
@@ -41,38 +41,62 @@ pub fn is_known(kind: &str) -> bool {
     KINDS.contains(&kind)
 }
 
+/// Expands `$body` with `$S` bound to the scenario type of kind tag `$kind`, or `$other`
+/// for an unknown tag.
+macro_rules! with_kind {
+    ($kind:expr, $S:ident => $body:expr, $other:ident => $fallback:expr) => {
+        match $kind {
+            lumped_cooling::LumpedCooling::KIND => {
+                type $S = lumped_cooling::LumpedCooling;
+                $body
+            }
+            mpm_semi_infinite_bar::SemiInfiniteBar::KIND => {
+                type $S = mpm_semi_infinite_bar::SemiInfiniteBar;
+                $body
+            }
+            mpm_dem_rod::MpmDemRod::KIND => {
+                type $S = mpm_dem_rod::MpmDemRod;
+                $body
+            }
+            mpm_dem_square::MpmDemSquare::KIND => {
+                type $S = mpm_dem_square::MpmDemSquare;
+                $body
+            }
+            mpm_dem_biaxial::MpmDemBiaxial::KIND => {
+                type $S = mpm_dem_biaxial::MpmDemBiaxial;
+                $body
+            }
+            mpm_dem_column::MpmDemColumn::KIND => {
+                type $S = mpm_dem_column::MpmDemColumn;
+                $body
+            }
+            dem_uniaxial_tension_bar::DemTensionBar::KIND => {
+                type $S = dem_uniaxial_tension_bar::DemTensionBar;
+                $body
+            }
+            pore_scale_bar::PoreScaleBar::KIND => {
+                type $S = pore_scale_bar::PoreScaleBar;
+                $body
+            }
+            $other => $fallback,
+        }
+    };
+}
+
+fn unknown_kind(other: &str) -> ConfigError {
+    ConfigError::new(
+        "kind",
+        format!("unknown scenario kind `{other}`; one of {}", names()),
+    )
+}
+
 /// Checks the document as its kind's run does before writing anything: parameters, time and
 /// output sections, and building the initial state. Every document gives `Ok` or an error
 /// naming the key path, never a panic.
 pub fn validate(doc: &ScenarioDocument) -> Result<(), ConfigError> {
-    match doc.common.kind.as_str() {
-        lumped_cooling::LumpedCooling::KIND => {
-            scenario::validate::<lumped_cooling::LumpedCooling>(doc)
-        }
-        mpm_semi_infinite_bar::SemiInfiniteBar::KIND => {
-            scenario::validate::<mpm_semi_infinite_bar::SemiInfiniteBar>(doc)
-        }
-        mpm_dem_rod::MpmDemRod::KIND => scenario::validate::<mpm_dem_rod::MpmDemRod>(doc),
-        mpm_dem_square::MpmDemSquare::KIND => {
-            scenario::validate::<mpm_dem_square::MpmDemSquare>(doc)
-        }
-        mpm_dem_biaxial::MpmDemBiaxial::KIND => {
-            scenario::validate::<mpm_dem_biaxial::MpmDemBiaxial>(doc)
-        }
-        mpm_dem_column::MpmDemColumn::KIND => {
-            scenario::validate::<mpm_dem_column::MpmDemColumn>(doc)
-        }
-        dem_uniaxial_tension_bar::DemTensionBar::KIND => {
-            scenario::validate::<dem_uniaxial_tension_bar::DemTensionBar>(doc)
-        }
-        pore_scale_bar::PoreScaleBar::KIND => {
-            scenario::validate::<pore_scale_bar::PoreScaleBar>(doc)
-        }
-        other => Err(ConfigError::new(
-            "kind",
-            format!("unknown scenario kind `{other}`; one of {}", names()),
-        )),
-    }
+    with_kind!(doc.common.kind.as_str(),
+        S => scenario::validate::<S>(doc),
+        other => Err(unknown_kind(other)))
 }
 
 /// Runs the document with the driver of its kind.
@@ -81,35 +105,86 @@ pub fn dispatch(
     file: &Path,
     opts: &DriveOptions<'_>,
 ) -> Result<Outcome, RunError> {
-    match doc.common.kind.as_str() {
-        lumped_cooling::LumpedCooling::KIND => {
-            drive::<lumped_cooling::LumpedCooling>(doc, file, opts)
-        }
-        mpm_semi_infinite_bar::SemiInfiniteBar::KIND => {
-            drive::<mpm_semi_infinite_bar::SemiInfiniteBar>(doc, file, opts)
-        }
-        mpm_dem_rod::MpmDemRod::KIND => drive::<mpm_dem_rod::MpmDemRod>(doc, file, opts),
-        mpm_dem_square::MpmDemSquare::KIND => {
-            drive::<mpm_dem_square::MpmDemSquare>(doc, file, opts)
-        }
-        mpm_dem_biaxial::MpmDemBiaxial::KIND => {
-            drive::<mpm_dem_biaxial::MpmDemBiaxial>(doc, file, opts)
-        }
-        mpm_dem_column::MpmDemColumn::KIND => {
-            drive::<mpm_dem_column::MpmDemColumn>(doc, file, opts)
-        }
-        dem_uniaxial_tension_bar::DemTensionBar::KIND => {
-            drive::<dem_uniaxial_tension_bar::DemTensionBar>(doc, file, opts)
-        }
-        pore_scale_bar::PoreScaleBar::KIND => {
-            drive::<pore_scale_bar::PoreScaleBar>(doc, file, opts)
-        }
-        other => Err(RunError::Config {
-            path: file.to_path_buf(),
-            error: ConfigError::new(
-                "kind",
-                format!("unknown scenario kind `{other}`; one of {}", names()),
-            ),
-        }),
+    with_kind!(doc.common.kind.as_str(),
+    S => drive::<S>(doc, file, opts),
+    other => Err(RunError::Config {
+        path: file.to_path_buf(),
+        error: unknown_kind(other),
+    }))
+}
+
+/// A [`Run`] of any kind, stepped through one interface (the Python module's `Run`).
+pub trait DynRun: Send {
+    /// The kind tag.
+    fn kind(&self) -> &'static str;
+    /// Steps completed.
+    fn steps_done(&self) -> u64;
+    /// Steps of the whole run.
+    fn n_steps(&self) -> u64;
+    /// The time step \[s\].
+    fn dt(&self) -> f64;
+    /// One step on the output schedule (see [`Run::advance`]).
+    fn advance(&mut self, interrupted: bool) -> Result<(), RunError>;
+    /// A checkpoint of the current step (see [`Run::checkpoint`]).
+    fn checkpoint(&mut self) -> Result<PathBuf, RunError>;
+    /// Ends the run (see [`Run::finish`]).
+    fn finish(&mut self) -> Result<Outcome, RunError>;
+    /// Monitored headers and values, time first.
+    fn monitor(&mut self) -> (Vec<String>, Vec<f64>);
+    /// The state's named arrays.
+    fn arrays(&self) -> Vec<StateArray<'_>>;
+    /// Replaces a writable array.
+    fn set_array(&mut self, name: &str, values: &[f64]) -> Result<(), RunError>;
+}
+
+impl<S> DynRun for Run<S>
+where
+    S: Scenario + Send,
+    S::State: Send,
+{
+    fn kind(&self) -> &'static str {
+        S::KIND
     }
+    fn steps_done(&self) -> u64 {
+        Run::steps_done(self)
+    }
+    fn n_steps(&self) -> u64 {
+        Run::n_steps(self)
+    }
+    fn dt(&self) -> f64 {
+        Run::dt(self)
+    }
+    fn advance(&mut self, interrupted: bool) -> Result<(), RunError> {
+        Run::advance(self, interrupted)
+    }
+    fn checkpoint(&mut self) -> Result<PathBuf, RunError> {
+        Run::checkpoint(self)
+    }
+    fn finish(&mut self) -> Result<Outcome, RunError> {
+        Run::finish(self)
+    }
+    fn monitor(&mut self) -> (Vec<String>, Vec<f64>) {
+        Run::monitor(self)
+    }
+    fn arrays(&self) -> Vec<StateArray<'_>> {
+        Run::arrays(self)
+    }
+    fn set_array(&mut self, name: &str, values: &[f64]) -> Result<(), RunError> {
+        Run::set_array(self, name, values)
+    }
+}
+
+/// Opens a run of the document's kind (see [`Run::open`]).
+pub fn open(
+    doc: ScenarioDocument,
+    file: &Path,
+    out: &Path,
+    resume: Option<&Path>,
+) -> Result<Box<dyn DynRun>, RunError> {
+    with_kind!(doc.common.kind.as_str(),
+    S => Ok(Box::new(Run::<S>::open(doc, file, out, resume)?)),
+    other => Err(RunError::Config {
+        path: file.to_path_buf(),
+        error: unknown_kind(other),
+    }))
 }

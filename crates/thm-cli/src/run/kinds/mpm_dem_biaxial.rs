@@ -163,6 +163,24 @@ impl Scenario for MpmDemBiaxial {
     type Params = Params;
     type State = State;
 
+    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::run::scenario::StateArray<'s>> {
+        #[allow(unused_mut)]
+        let mut arrays =
+            crate::run::arrays::point_arrays(&state.mpm.points, &crate::run::arrays::POINTS);
+        arrays
+    }
+
+    fn set_array(&mut self, state: &mut State, name: &str, values: &[f64]) -> Result<(), RunError> {
+        use crate::run::arrays::{POINTS, set_point_array, writable_points};
+        if set_point_array(&mut state.mpm.points, &POINTS, name, values)? {
+            return Ok(());
+        }
+        Err(crate::run::scenario::not_writable(
+            name,
+            &writable_points(&POINTS),
+        ))
+    }
+
     fn init(p: &Params, time: &TimeControl) -> Result<(Self, State), ConfigError> {
         let b = &p.biaxial;
         for (k, v) in b.cells.iter().enumerate() {

@@ -82,6 +82,29 @@ impl Scenario for MpmDemRod {
     type Params = Params;
     type State = MpmState<RvePoint>;
 
+    fn arrays<'s>(&'s self, state: &'s Self::State) -> Vec<crate::run::scenario::StateArray<'s>> {
+        #[allow(unused_mut)]
+        let mut arrays =
+            crate::run::arrays::point_arrays(&state.points, &crate::run::arrays::POINTS);
+        arrays
+    }
+
+    fn set_array(
+        &mut self,
+        state: &mut Self::State,
+        name: &str,
+        values: &[f64],
+    ) -> Result<(), RunError> {
+        use crate::run::arrays::{POINTS, set_point_array, writable_points};
+        if set_point_array(&mut state.points, &POINTS, name, values)? {
+            return Ok(());
+        }
+        Err(crate::run::scenario::not_writable(
+            name,
+            &writable_points(&POINTS),
+        ))
+    }
+
     fn init(p: &Params, time: &TimeControl) -> Result<(Self, Self::State), ConfigError> {
         let r = &p.rod;
         if !(2..=10_000).contains(&r.cells) {

@@ -107,6 +107,45 @@ impl Scenario for MpmDemSquare {
     type Params = Params;
     type State = SquareState;
 
+    fn arrays<'s>(&'s self, state: &'s SquareState) -> Vec<crate::run::scenario::StateArray<'s>> {
+        #[allow(unused_mut)]
+        let mut arrays =
+            crate::run::arrays::point_arrays(&state.multiscale.points, &crate::run::arrays::POINTS);
+        arrays.extend(crate::run::arrays::point_arrays(
+            &state.twin.points,
+            &crate::run::arrays::TWIN_POINTS,
+        ));
+        arrays
+    }
+
+    fn set_array(
+        &mut self,
+        state: &mut SquareState,
+        name: &str,
+        values: &[f64],
+    ) -> Result<(), RunError> {
+        use crate::run::arrays::{POINTS, set_point_array, writable_points};
+        if set_point_array(&mut state.multiscale.points, &POINTS, name, values)? {
+            return Ok(());
+        }
+        if set_point_array(
+            &mut state.twin.points,
+            &crate::run::arrays::TWIN_POINTS,
+            name,
+            values,
+        )? {
+            return Ok(());
+        }
+        Err(crate::run::scenario::not_writable(
+            name,
+            &[
+                writable_points(&POINTS),
+                writable_points(&crate::run::arrays::TWIN_POINTS),
+            ]
+            .concat(),
+        ))
+    }
+
     fn init(p: &Params, time: &TimeControl) -> Result<(Self, Self::State), ConfigError> {
         let s = &p.square;
         if !(2..=200).contains(&s.cells) {

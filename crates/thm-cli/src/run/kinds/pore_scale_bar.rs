@@ -314,6 +314,27 @@ impl Scenario for PoreScaleBar {
     type Params = Params;
     type State = BarRun;
 
+    fn arrays<'s>(&'s self, run: &'s BarRun) -> Vec<crate::run::scenario::StateArray<'s>> {
+        use crate::run::scenario::StateArray;
+        let c = &run.coupled;
+        // The spheres' forces are set by the coupling every step (pore pressure), so none of
+        // this kind's arrays is writable.
+        let mut arrays = crate::run::arrays::sphere_arrays(&c.dem.particles);
+        for a in &mut arrays {
+            a.writable = false;
+        }
+        arrays.extend([
+            StateArray::scalar("pore_pressure", "Pa", &c.flow.pressure),
+            StateArray::scalar("pore_liquid_fraction", "1", &c.flow.liquid_fraction),
+            StateArray::scalar("pore_volume", "m^3", &c.flow.volume),
+            StateArray::scalar("pore_temperature", "K", &c.flow.temperature),
+            StateArray::scalar("pore_liquid_mass", "kg", &c.flow.liquid_mass),
+            StateArray::scalar("pore_gas_mass", "kg", &c.flow.gas_mass),
+            StateArray::scalar("cell_temperature", "K", &c.heat.temperature),
+        ]);
+        arrays
+    }
+
     fn init(p: &Params, _time: &TimeControl) -> Result<(Self, BarRun), ConfigError> {
         let b = &p.bar;
         let case = match (b.case, &b.pressure_drop) {

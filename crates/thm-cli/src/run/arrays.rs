@@ -1,0 +1,167 @@
+//! The state arrays the kinds share, for front ends that read and write a run's state between
+//! steps (see [`super::scenario::Scenario::arrays`]): material points of `thm-mpm`, spheres of
+//! `thm-dem`, pores and cells of the pore-scale model.
+//!
+//! Names say what a row is (`point_`, `sphere_`, `pore_`, `cell_`) and what it holds; units
+//! are SI. Stresses are Cauchy `[σxx, σyy, σxy]`, tension positive, as `thm-mpm` holds them.
+//! Writable arrays are part of the state, so what is written is checkpointed with it.
+
+use std::borrow::Cow;
+
+use thm_dem::{ParticleState, Vec3};
+use thm_mpm::MaterialPoints;
+
+use super::error::RunError;
+use super::scenario::{StateArray, check_input};
+
+/// Highest temperature accepted from outside \[K\].
+pub const MAX_TEMPERATURE: f64 = 1.0e5;
+/// Largest speed accepted from outside \[m/s\].
+pub const MAX_SPEED: f64 = 1.0e4;
+/// Largest external force accepted from outside \[N\].
+pub const MAX_FORCE: f64 = 1.0e12;
+
+/// The names of the material-point arrays of one set of points (a kind may have two, as the
+/// square's multiscale model and its pure-MPM twin).
+#[derive(Debug, Clone, Copy)]
+pub struct PointNames {
+    /// Centres \[m\], 2 columns.
+    pub position: &'static str,
+    /// Velocities \[m/s\], 2 columns (writable).
+    pub velocity: &'static str,
+    /// Cauchy stress \[Pa\], `[xx, yy, xy]`.
+    pub stress: &'static str,
+    /// Temperatures \[K\] (writable).
+    pub temperature: &'static str,
+    /// Heat source \[W/m³\].
+    pub heat_source: &'static str,
+    /// Volumes \[m³ per m of thickness\].
+    pub volume: &'static str,
+    /// Masses \[kg per m of thickness\].
+    pub mass: &'static str,
+}
+
+/// The material points of a kind with one set.
+pub const POINTS: PointNames = PointNames {
+    position: "point_position",
+    velocity: "point_velocity",
+    stress: "point_stress",
+    temperature: "point_temperature",
+    heat_source: "point_heat_source",
+    volume: "point_volume",
+    mass: "point_mass",
+};
+
+/// The pure-MPM twin's points (the square).
+pub const TWIN_POINTS: PointNames = PointNames {
+    position: "twin_point_position",
+    velocity: "twin_point_velocity",
+    stress: "twin_point_stress",
+    temperature: "twin_point_temperature",
+    heat_source: "twin_point_heat_source",
+    volume: "twin_point_volume",
+    mass: "twin_point_mass",
+};
+
+/// The arrays of material points `p`.
+pub fn point_arrays<'a>(p: &'a MaterialPoints, names: &PointNames) -> Vec<StateArray<'a>> {
+    vec![
+        StateArray::rows(names.position, "m", &p.position),
+        StateArray::rows(names.velocity, "m/s", &p.velocity).writable(),
+        StateArray::rows(names.stress, "Pa", &p.stress),
+        StateArray::scalar(names.temperature, "K", &p.temperature).writable(),
+        StateArray::scalar(names.heat_source, "W/m^3", &p.heat_source),
+        StateArray::scalar(names.volume, "m^3", &p.volume),
+        StateArray::scalar(names.mass, "kg", &p.mass),
+    ]
+}
+
+/// Writes `values` into the writable point array `name`, if it is one of `names`';
+/// `Ok(false)` when the name is not a point array of `names`.
+pub fn set_point_array(
+    p: &mut MaterialPoints,
+    names: &PointNames,
+    name: &str,
+    values: &[f64],
+) -> Result<bool, RunError> {
+    if name == names.temperature {
+        check_input(name, values, p.len(), (0.0, MAX_TEMPERATURE), true, "K")?;
+        p.temperature.copy_from_slice(values);
+        Ok(true)
+    } else if name == names.velocity {
+        check_input(
+            name,
+            values,
+            2 * p.len(),
+            (-MAX_SPEED, MAX_SPEED),
+            false,
+            "m/s",
+        )?;
+        p.velocity.as_flattened_mut().copy_from_slice(values);
+        Ok(true)
+    } else {
+        Ok(false)
+    }
+}
+
+/// The writable point arrays of `names`.
+pub fn writable_points(names: &PointNames) -> [&'static str; 2] {
+    [names.velocity, names.temperature]
+}
+
+fn flatten(v: &[Vec3]) -> Cow<'static, [f64]> {
+    Cow::Owned(v.iter().flat_map(|a| [a.x, a.y, a.z]).collect())
+}
+
+/// The arrays of spheres `s`: centres, velocities and external forces are copied (the DEM
+/// keeps them as `Vec3`); radii and temperatures are borrowed.
+pub fn sphere_arrays(s: &ParticleState) -> Vec<StateArray<'_>> {
+    vec![
+        StateArray {
+            name: "sphere_position",
+            unit: "m",
+            columns: 3,
+            values: flatten(&s.position),
+            writable: false,
+        },
+        StateArray {
+            name: "sphere_velocity",
+            unit: "m/s",
+            columns: 3,
+            values: flatten(&s.velocity),
+            writable: false,
+        },
+        StateArray::scalar("sphere_radius", "m", &s.radius),
+        StateArray::scalar("sphere_temperature", "K", &s.temperature),
+        StateArray {
+            name: "sphere_external_force",
+            unit: "N",
+            columns: 3,
+            values: flatten(&s.external_force),
+            writable: true,
+        },
+    ]
+}
+
+/// Writes the spheres' external forces (a load); `Ok(false)` for another name.
+pub fn set_sphere_force(
+    s: &mut ParticleState,
+    name: &str,
+    values: &[f64],
+) -> Result<bool, RunError> {
+    if name != "sphere_external_force" {
+        return Ok(false);
+    }
+    check_input(
+        name,
+        values,
+        3 * s.len(),
+        (-MAX_FORCE, MAX_FORCE),
+        false,
+        "N",
+    )?;
+    for (f, v) in s.external_force.iter_mut().zip(values.chunks_exact(3)) {
+        *f = Vec3::new(v[0], v[1], v[2]);
+    }
+    Ok(true)
+}
