@@ -28,7 +28,11 @@ const ALLOWED_WORKSPACE_DEPS: &[(&str, &[&str])] = &[
 ];
 
 /// External crates that only one workspace crate may use.
-const EXCLUSIVE_EXTERNAL: &[(&str, &str)] = &[("spade", "thm-vpn-mesh")];
+const EXCLUSIVE_EXTERNAL: &[(&str, &str)] = &[
+    ("spade", "thm-vpn-mesh"),
+    ("pyo3", "thm-py"),
+    ("numpy", "thm-py"),
+];
 
 fn read(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_default()
