@@ -286,3 +286,16 @@ def test_ctrl_c_stops_after_the_step_with_a_checkpoint(thm_bin, tmp_path):
         assert whole[name] == cut[name], name
     last = f"checkpoints/step_{k + 13:010d}.ckpt"
     assert whole[last] == cut[last]
+
+
+def test_example_script_plots_a_history(tmp_path):
+    pytest.importorskip("matplotlib")
+    file = case_file("lumped_cooling", tmp_path)
+    example = Path(__file__).resolve().parents[1] / "examples/plot_history.py"
+    done = subprocess.run(
+        [sys.executable, str(example), str(file), "--out", str(tmp_path / "ex")],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    png = (tmp_path / "ex/history.png").read_bytes()
+    assert png.startswith(b"\x89PNG\r\n\x1a\n") and len(png) > 10_000
