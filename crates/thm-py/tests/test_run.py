@@ -221,6 +221,10 @@ def test_state_arrays_of_the_coupled_kinds(tmp_path):
     rod["point_velocity"] = np.zeros_like(v)
     rod.step(1)
     assert rod["point_stress"].shape == (v.shape[0], 3)
+    # B-Sect. 5.2.1: 50 points, each a regular packing of 400 disks.
+    assert v.shape[0] == 50 and np.all(rod["point_rve_disks"] == 400)
+    assert np.all(rod["point_dem_substeps"] >= 1)
+    assert np.all(rod["point_void_ratio"] > 0) and np.all(rod["point_coordination"] > 0)
     rod.finish()
 
 

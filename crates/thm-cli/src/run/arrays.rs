@@ -165,3 +165,30 @@ pub fn set_sphere_force(
     }
     Ok(true)
 }
+
+/// Per-point figures of the RVEs of an MPM×DEM kind, computed when read (read-only):
+/// disks, DEM steps of the last MPM step (their product summed over points is the step's
+/// disk-steps), void ratio (void over solid area), coordination number, intact bonds and the
+/// friction work of the last MPM step \[J\].
+pub fn rve_arrays(material: &[thm_coupling::multiscale::RvePoint]) -> Vec<StateArray<'static>> {
+    let owned =
+        |name: &'static str,
+         unit: &'static str,
+         f: &dyn Fn(&thm_coupling::multiscale::RvePoint) -> f64| StateArray {
+            name,
+            unit,
+            columns: 1,
+            values: Cow::Owned(material.iter().map(f).collect()),
+            writable: false,
+        };
+    vec![
+        owned("point_rve_disks", "1", &|p| p.rve.len() as f64),
+        owned("point_dem_substeps", "1", &|p| f64::from(p.substeps)),
+        owned("point_void_ratio", "1", &|p| p.rve.void_ratio()),
+        owned("point_coordination", "1", &|p| p.rve.coordination_number()),
+        owned("point_intact_bonds", "1", &|p| {
+            p.rve.contacts.intact_bond_count() as f64
+        }),
+        owned("point_friction_work", "J", &|p| p.friction_work),
+    ]
+}

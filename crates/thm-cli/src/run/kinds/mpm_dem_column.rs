@@ -145,9 +145,9 @@ impl Scenario for MpmDemColumn {
     type State = State;
 
     fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::run::scenario::StateArray<'s>> {
-        #[allow(unused_mut)]
         let mut arrays =
             crate::run::arrays::point_arrays(&state.mpm.points, &crate::run::arrays::POINTS);
+        arrays.extend(crate::run::arrays::rve_arrays(&state.mpm.material));
         arrays
     }
 

@@ -83,9 +83,9 @@ impl Scenario for MpmDemRod {
     type State = MpmState<RvePoint>;
 
     fn arrays<'s>(&'s self, state: &'s Self::State) -> Vec<crate::run::scenario::StateArray<'s>> {
-        #[allow(unused_mut)]
         let mut arrays =
             crate::run::arrays::point_arrays(&state.points, &crate::run::arrays::POINTS);
+        arrays.extend(crate::run::arrays::rve_arrays(&state.material));
         arrays
     }
 

@@ -108,13 +108,13 @@ impl Scenario for MpmDemSquare {
     type State = SquareState;
 
     fn arrays<'s>(&'s self, state: &'s SquareState) -> Vec<crate::run::scenario::StateArray<'s>> {
-        #[allow(unused_mut)]
         let mut arrays =
             crate::run::arrays::point_arrays(&state.multiscale.points, &crate::run::arrays::POINTS);
         arrays.extend(crate::run::arrays::point_arrays(
             &state.twin.points,
             &crate::run::arrays::TWIN_POINTS,
         ));
+        arrays.extend(crate::run::arrays::rve_arrays(&state.multiscale.material));
         arrays
     }
 

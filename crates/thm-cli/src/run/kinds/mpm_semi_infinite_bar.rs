@@ -78,10 +78,7 @@ impl Scenario for SemiInfiniteBar {
     type State = MpmState<()>;
 
     fn arrays<'s>(&'s self, state: &'s Self::State) -> Vec<crate::run::scenario::StateArray<'s>> {
-        #[allow(unused_mut)]
-        let mut arrays =
-            crate::run::arrays::point_arrays(&state.points, &crate::run::arrays::POINTS);
-        arrays
+        crate::run::arrays::point_arrays(&state.points, &crate::run::arrays::POINTS)
     }
 
     fn set_array(
