@@ -303,3 +303,16 @@ def test_example_script_plots_a_history(tmp_path):
     assert done.returncode == 0, done.stderr
     png = (tmp_path / "ex/history.png").read_bytes()
     assert png.startswith(b"\x89PNG\r\n\x1a\n") and len(png) > 10_000
+
+
+@pytest.mark.parametrize("scenario", sorted(p.stem for p in (Path(__file__).resolve().parents[3] / "scenarios").glob("*.toml")))
+def test_every_scenario_stops_after_one_step_with_a_summary(tmp_path, scenario):
+    # Stopping a run early (Ctrl-C, finish before the end) must leave a checkpoint and a
+    # summary whatever the kind shows at that point.
+    file = Path(__file__).resolve().parents[3] / "scenarios" / f"{scenario}.toml"
+    run = thm.Run(file, out=tmp_path / "o")
+    run.step(1)
+    stopped = run.finish()
+    assert not stopped["finished"] and stopped["steps"] == 1
+    assert Path(stopped["checkpoint"]).exists()
+    assert "interrupted" in (tmp_path / "o" / "summary.md").read_text()

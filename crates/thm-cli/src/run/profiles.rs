@@ -217,6 +217,17 @@ pub fn plot_profiles(out: &Path, last_step: u64, md: &mut String) -> Result<(), 
             });
         }
         for plot in &plots {
+            // A profile can be all non-finite early in a run (a ratio before its reference
+            // exists): say so instead of failing the summary.
+            let drawable = plot.series.iter().any(|s| {
+                s.x.iter()
+                    .zip(&s.y)
+                    .any(|(x, y)| x.is_finite() && y.is_finite())
+            });
+            if !drawable {
+                let _ = writeln!(md, "- {}: no finite value to draw yet\n", plot.title);
+                continue;
+            }
             let png = format!("{}.png", plot.name);
             thm_io::write_plot_png(plot, &out.join(&png))?;
             let _ = writeln!(md, "![{}]({png})\n", plot.title);
