@@ -26,6 +26,8 @@ pub mod mpm_column {
                 velocity: [0.0; 2],
                 friction: 0.5,
                 removal_time: None,
+                extent: None,
+                depth: None,
             },
             RigidWall {
                 point: [h, 0.0],
@@ -33,6 +35,8 @@ pub mod mpm_column {
                 velocity: [0.0; 2],
                 friction: 0.0,
                 removal_time: None,
+                extent: None,
+                depth: None,
             },
         ];
         let config = MpmConfig::new(params).expect("valid parameters");

@@ -116,6 +116,12 @@ impl SurfaceLoad {
 /// velocity in the normal direction when they approach it, and Coulomb friction
 /// `|Δv_t| ≤ μ |Δv_n|` tangentially; nodes that separate are left free. The line moves with
 /// `velocity`; the wall disappears at `removal_time` (if any).
+///
+/// A wall can be finite (a silo's side, a hopper's inclined side): `extent` limits it along
+/// the line to `s_min ≤ s ≤ s_max`, with `s = (x − p(t))·t̂` measured from the moving `point`
+/// along `t̂ = (n_y, −n_x)`, and `depth` limits the region it acts on to a band `−depth ≤ d ≤ 0`
+/// behind the line, so that material on the far side of a thin wall (or past its end) moves
+/// freely. [`RigidWall::segment`] builds one from its two end points.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RigidWall {
@@ -130,9 +136,46 @@ pub struct RigidWall {
     /// Time at which the wall is removed (s); `None` = never.
     #[serde(default)]
     pub removal_time: Option<f64>,
+    /// `[s_min, s_max]` along the line (m), see above; `None` = the whole line.
+    #[serde(default)]
+    pub extent: Option<[f64; 2]>,
+    /// Depth of the band behind the line that the wall acts on (m), see above; `None` = the
+    /// whole half-plane.
+    #[serde(default)]
+    pub depth: Option<f64>,
 }
 
 impl RigidWall {
+    /// An infinite, fixed wall: the half-plane behind the line through `point` with normal
+    /// `normal` into the material.
+    pub fn half_plane(point: [f64; 2], normal: [f64; 2], friction: f64) -> Self {
+        Self {
+            point,
+            normal,
+            velocity: [0.0; 2],
+            friction,
+            removal_time: None,
+            extent: None,
+            depth: None,
+        }
+    }
+
+    /// A fixed wall segment from `a` to `b` with the material on its left (the normal is
+    /// `b − a` turned by +90°), acting on nodes up to `depth` behind it.
+    pub fn segment(a: [f64; 2], b: [f64; 2], friction: f64, depth: f64) -> Self {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let length = (dx * dx + dy * dy).sqrt();
+        Self {
+            point: a,
+            normal: [-dy / length, dx / length],
+            velocity: [0.0; 2],
+            friction,
+            removal_time: None,
+            extent: Some([0.0, length]),
+            depth: Some(depth),
+        }
+    }
+
     pub(crate) fn validated(mut self, k: usize) -> Result<Self, MpmError> {
         let n = (self.normal[0] * self.normal[0] + self.normal[1] * self.normal[1]).sqrt();
         if !(n.is_finite() && n > 0.0) {
@@ -148,6 +191,24 @@ impl RigidWall {
                 name: format!("walls[{k}].friction"),
                 value: self.friction,
                 allowed: "[0, inf]",
+            });
+        }
+        if let Some([lo, hi]) = self.extent
+            && !(lo.is_finite() && hi.is_finite() && lo < hi)
+        {
+            return Err(MpmError::InvalidParameter {
+                name: format!("walls[{k}].extent"),
+                value: if lo.is_finite() { hi } else { lo },
+                allowed: "[s_min, s_max] finite with s_min < s_max (m)",
+            });
+        }
+        if let Some(h) = self.depth
+            && !(h.is_finite() && h > 0.0)
+        {
+            return Err(MpmError::InvalidParameter {
+                name: format!("walls[{k}].depth"),
+                value: h,
+                allowed: "(0, inf) m",
             });
         }
         for v in self.point.iter().chain(self.velocity.iter()) {
@@ -174,6 +235,32 @@ impl RigidWall {
         let px = self.point[0] + self.velocity[0] * t;
         let py = self.point[1] + self.velocity[1] * t;
         (x[0] - px) * self.normal[0] + (x[1] - py) * self.normal[1]
+    }
+
+    /// Coordinate of `x` along the wall line at time `t`, `(x − p(t))·t̂` with
+    /// `t̂ = (n_y, −n_x)` (m).
+    #[inline]
+    pub fn along(&self, x: [f64; 2], t: f64) -> f64 {
+        let px = self.point[0] + self.velocity[0] * t;
+        let py = self.point[1] + self.velocity[1] * t;
+        (x[0] - px) * self.normal[1] - (x[1] - py) * self.normal[0]
+    }
+
+    /// Whether the wall constrains a node at `x` at time `t`: present, `x` on or behind the
+    /// line, within the band `depth` and within `extent` along it.
+    #[inline]
+    pub fn acts_on(&self, x: [f64; 2], t: f64) -> bool {
+        if !self.active(t) {
+            return false;
+        }
+        let d = self.distance(x, t);
+        if d > 0.0 || self.depth.is_some_and(|h| d < -h) {
+            return false;
+        }
+        self.extent.is_none_or(|[lo, hi]| {
+            let s = self.along(x, t);
+            s >= lo && s <= hi
+        })
     }
 
     /// The contact correction of a nodal velocity `v` (new velocity, after the grid update).

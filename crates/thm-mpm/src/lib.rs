@@ -24,7 +24,9 @@
 //! * Boundary conditions ([`boundary`]): prescribed nodal temperature (B-Eq. 4a), fixed and
 //!   roller nodal velocity, tractions and heat fluxes through the virtual boundary layer of
 //!   thickness `h` (B-Eqs. 17–18, Zhang et al. 2011), gravity, rigid walls/plates with Coulomb
-//!   friction that move at a prescribed velocity and can be removed at a given time. Surface
+//!   friction that move at a prescribed velocity and can be removed at a given time; a wall
+//!   is a whole half-plane or finite (`RigidWall::segment`: acting only between its end
+//!   points and within a band of given depth behind it, as a silo's sides). Surface
 //!   loads may be replaced between steps (`Mpm::set_surface_loads`, e.g. a follower pressure
 //!   on a bulging side).
 //! * Small-mass nodes: a node that a point's domain only grazes gets a sliver of mass but a

@@ -602,7 +602,7 @@ fn update_row(
             }
             let x = inp.grid.node_position(i, j);
             for (wall, r) in inp.walls.iter().zip(row.reactions.iter_mut()) {
-                if wall.active(time) && wall.distance(x, time) <= 0.0 {
+                if wall.acts_on(x, time) {
                     let c = wall.constrain(v1);
                     r[0] -= s.mass * (c[0] - v1[0]) * inv_dt;
                     r[1] -= s.mass * (c[1] - v1[1]) * inv_dt;

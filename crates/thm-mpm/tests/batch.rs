@@ -21,6 +21,8 @@ fn block() -> (Mpm, MpmState<DruckerPragerState>, DruckerPrager) {
         velocity: [0.0; 2],
         friction: 0.4,
         removal_time: None,
+        extent: None,
+        depth: None,
     }];
     params.velocity_conditions = vec![VelocityCondition {
         nodes: NodeSet::Side(Side::Left),

@@ -255,6 +255,8 @@ fn column(
             velocity: [0.0; 2],
             friction: 0.4,
             removal_time: None,
+            extent: None,
+            depth: None,
         },
         RigidWall {
             point: [0.6, 0.0],
@@ -262,6 +264,8 @@ fn column(
             velocity: [0.0; 2],
             friction: 0.0,
             removal_time: walls_removed_at,
+            extent: None,
+            depth: None,
         },
     ];
     params.velocity_conditions = vec![VelocityCondition {
@@ -380,6 +384,8 @@ fn block_sliding_on_floor_decelerates_at_mu_g() {
         velocity: [0.0; 2],
         friction: mu,
         removal_time: None,
+        extent: None,
+        depth: None,
     }];
     let config = MpmConfig::new(params).unwrap();
     let mat = LinearThermoElastic::new(&ThermoElasticParameters {
@@ -643,6 +649,8 @@ fn moving_plate_drives_the_material() {
         velocity: [0.0, v],
         friction: 0.0,
         removal_time: None,
+        extent: None,
+        depth: None,
     }];
     let config = MpmConfig::new(params).unwrap();
     let mat = LinearThermoElastic::new(&ThermoElasticParameters {

@@ -575,6 +575,8 @@ impl BiaxialModel {
                 velocity: [0.0, 0.0],
                 friction: f64::INFINITY,
                 removal_time: None,
+                extent: None,
+                depth: None,
             },
             RigidWall {
                 point: [0.0, t.height],
@@ -582,6 +584,8 @@ impl BiaxialModel {
                 velocity: [0.0, -t.plate_speed],
                 friction: f64::INFINITY,
                 removal_time: None,
+                extent: None,
+                depth: None,
             },
         ];
         let config = MpmConfig::new(params)?;

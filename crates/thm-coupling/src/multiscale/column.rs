@@ -572,6 +572,8 @@ impl ColumnModel {
             velocity: [0.0, 0.0],
             friction,
             removal_time: None,
+            extent: None,
+            depth: None,
         };
         let ground = wall([0.0, 0.0], [0.0, 1.0], t.ground_friction);
         let left = wall([0.0, 0.0], [1.0, 0.0], t.plate_friction);
