@@ -128,7 +128,8 @@
 //! The MPM×DEM scheme with the granular rod of B-Sect. 5.2.1 (also as the `thm run` kind
 //! `mpm_dem_rod`), the square of B-Sect. 5.2.2 (`mpm_dem_square`), the biaxial tests of
 //! B-Sect. 5.3.1 and B-Fig. 18 (`mpm_dem_biaxial`) and the column collapse of B-Sect. 5.3.3
-//! (`mpm_dem_column`); not yet here: the silo discharge of B-Sect. 5.3.2.
+//! (`mpm_dem_column`); the silo discharge of B-Sect. 5.3.2 (`multiscale::silo`, kind
+//! `mpm_dem_silo`), which at the shipped reduced size stops before the paper's 12 s / 2 s.
 //!
 //! ## Verification ([`verification::cases`])
 //!

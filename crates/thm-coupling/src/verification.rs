@@ -76,6 +76,7 @@ pub fn cases() -> Vec<Case> {
     cases.extend(crate::multiscale::biaxial_verification::cases());
     cases.extend(crate::multiscale::biaxial_verification::bonded_cases());
     cases.extend(crate::multiscale::column_verification::cases());
+    cases.extend(crate::multiscale::silo_verification::cases());
     cases
 }
 

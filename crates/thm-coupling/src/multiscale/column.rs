@@ -404,17 +404,39 @@ pub fn column_packing(
     t: &ColumnTest,
 ) -> Result<(RveParams, RveState, ColumnPacking), MultiscaleError> {
     t.validate()?;
-    let mut p = t.rve;
+    consolidated_packing(
+        &t.rve,
+        t.seed,
+        t.disks,
+        [t.consolidation_stress, t.consolidation_friction],
+        t.friction,
+        t.conductivity,
+    )
+}
+
+/// The packing protocol of the column and the silo: `disks` random disks (seed `seed`,
+/// radii in [0.25, 0.5] mm) consolidated isotropically to `stress` with friction
+/// `consolidation_friction` (`[stress, consolidation_friction]`), at rest, α of B-Eq. 34 set
+/// so that it conducts `conductivity` (mean of the diagonal), μ set to `friction`, no bonds.
+pub(crate) fn consolidated_packing(
+    rve: &RveParams,
+    seed: u64,
+    disks: usize,
+    [stress, consolidation_friction]: [f64; 2],
+    friction: f64,
+    conductivity: f64,
+) -> Result<(RveParams, RveState, ColumnPacking), MultiscaleError> {
+    let mut p = *rve;
     p.thermal_resistance = 1.0;
     p.contact.thermal_bond = None;
     let config = p.validate().map_err(MultiscaleError::RveSetup)?;
-    let mut pp = PackingParams::paper_b(t.seed);
-    pp.disk_count = t.disks;
+    let mut pp = PackingParams::paper_b(seed);
+    pp.disk_count = disks;
     let mut state = thm_rve::random_packing(&pp, &config).map_err(MultiscaleError::RveSetup)?;
     let report = consolidate(
         &mut state,
         &config,
-        &ConsolidationParams::isotropic(t.consolidation_stress, t.consolidation_friction),
+        &ConsolidationParams::isotropic(stress, consolidation_friction),
     )
     .map_err(MultiscaleError::RveSetup)?;
     // At rest before the density scaling (see the biaxial test, choice 4).
@@ -428,8 +450,8 @@ pub fn column_packing(
     }
     state.friction_heat_total = 0.0;
     let k1 = measure::conductivity(&state, &p);
-    p.thermal_resistance = 0.5 * (k1.at(0, 0) + k1.at(1, 1)) / t.conductivity;
-    p.contact.friction_coefficient = t.friction;
+    p.thermal_resistance = 0.5 * (k1.at(0, 0) + k1.at(1, 1)) / conductivity;
+    p.contact.friction_coefficient = friction;
     let void_ratio = state.void_ratio();
     let force_contacts = state
         .contacts
@@ -742,20 +764,7 @@ impl ColumnModel {
     /// Reduces every RVE cell whose basis has become skewed (`thm_rve::RveState::reduce_cell`:
     /// the same lattice, so nothing physical changes), see the module docs, choice 8.
     pub fn reduce_cells(&mut self) -> Result<(), MultiscaleError> {
-        let step = self.state.step;
-        for (point, r) in self.state.material.iter_mut().enumerate() {
-            if let Err(source) = r.rve.reduce_cell() {
-                let s = r.rve.cell.strain();
-                return Err(MultiscaleError::Rve {
-                    point,
-                    step,
-                    volumetric_strain: s.volumetric,
-                    deviatoric_strain: s.deviatoric,
-                    source,
-                });
-            }
-        }
-        Ok(())
+        reduce_cells(&mut self.state)
     }
 
     /// One coupled step: the release when the settling is over, the MPM×DEM step, the heat
@@ -888,4 +897,24 @@ impl ColumnModel {
             runout,
         }
     }
+}
+
+/// Reduces every RVE cell of `state` whose basis has become skewed
+/// (`thm_rve::RveState::reduce_cell`: the same lattice, so nothing physical changes); for
+/// points in a flow (the column, the silo), see the column's module docs, choice 8.
+pub fn reduce_cells(state: &mut MpmState<RvePoint>) -> Result<(), MultiscaleError> {
+    let step = state.step;
+    for (point, r) in state.material.iter_mut().enumerate() {
+        if let Err(source) = r.rve.reduce_cell() {
+            let s = r.rve.cell.strain();
+            return Err(MultiscaleError::Rve {
+                point,
+                step,
+                volumetric_strain: s.volumetric,
+                deviatoric_strain: s.deviatoric,
+                source,
+            });
+        }
+    }
+    Ok(())
 }

@@ -136,6 +136,13 @@
 //! `coupling/mpm_dem_column_quick` and `coupling/mpm_dem_column` ([`column_verification`]);
 //! `docs/cases/mpm_dem_column.md`.
 //!
+//! **Silo discharge** (B-Sect. 5.3.2, [`silo`]): a 1 m silo with a 45° hopper and a 0.2 m
+//! opening 1 m above the ground, walls of finite extent (`thm_mpm::RigidWall::segment`), the
+//! sample settled with the opening closed and then discharged freely or under a plate moving
+//! down at 0.2 m/s; the stored heat equals the RVEs' friction work to round-off. Cases
+//! `coupling/mpm_dem_silo_quick` and `coupling/mpm_dem_silo` ([`silo_verification`]);
+//! `docs/cases/mpm_dem_silo.md`.
+//!
 //! Units: SI; the MPM side of the rod, the square, the biaxial test and the column in °C.
 
 pub mod biaxial;
@@ -146,6 +153,8 @@ pub mod error;
 pub mod material;
 pub mod params;
 pub mod rod;
+pub mod silo;
+pub mod silo_verification;
 pub mod square;
 pub mod stages;
 pub mod verification;
@@ -156,3 +165,4 @@ pub use error::MultiscaleError;
 pub use material::{RveMaterial, RvePoint};
 pub use params::{DemTimeRule, MultiscaleConfig, MultiscaleParams, QuasiStaticLimits};
 pub use rod::{GranularRod, RodModel};
+pub use silo::{SiloModel, SiloTest};

@@ -5,6 +5,7 @@ pub mod lumped_cooling;
 pub mod mpm_dem_biaxial;
 pub mod mpm_dem_column;
 pub mod mpm_dem_rod;
+pub mod mpm_dem_silo;
 pub mod mpm_dem_square;
 pub mod mpm_semi_infinite_bar;
 pub mod pore_scale_bar;
@@ -16,7 +17,7 @@ use super::error::{ConfigError, RunError};
 use super::scenario::{self, DriveOptions, Outcome, Run, Scenario, StateArray, drive};
 
 /// The `kind` tags.
-const KINDS: [&str; 8] = [
+const KINDS: [&str; 9] = [
     lumped_cooling::LumpedCooling::KIND,
     mpm_dem_rod::MpmDemRod::KIND,
     mpm_dem_square::MpmDemSquare::KIND,
@@ -25,6 +26,7 @@ const KINDS: [&str; 8] = [
     pore_scale_bar::PoreScaleBar::KIND,
     mpm_dem_biaxial::MpmDemBiaxial::KIND,
     mpm_dem_column::MpmDemColumn::KIND,
+    mpm_dem_silo::MpmDemSilo::KIND,
 ];
 
 /// The `kind` tags, for error messages.
@@ -68,6 +70,10 @@ macro_rules! with_kind {
             }
             mpm_dem_column::MpmDemColumn::KIND => {
                 type $S = mpm_dem_column::MpmDemColumn;
+                $body
+            }
+            mpm_dem_silo::MpmDemSilo::KIND => {
+                type $S = mpm_dem_silo::MpmDemSilo;
                 $body
             }
             dem_uniaxial_tension_bar::DemTensionBar::KIND => {

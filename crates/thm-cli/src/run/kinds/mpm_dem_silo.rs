@@ -1,0 +1,371 @@
+//! `kind = "mpm_dem_silo"`: heat generation in the discharge of a granular silo, B-Sect. 5.3.2
+//! of Zhao et al. (2022), on the MPM×DEM scheme of `thm-coupling`
+//! (`thm_coupling::multiscale::silo`).
+//!
+//! A 1 m wide silo with a 45° hopper and a 0.2 m opening 1 m above the ground is filled with
+//! material points (`points_per_cell²` per cell of `cell_size`), each carrying an RVE of
+//! `disks` disks consolidated to 10 kPa; the sample settles under gravity with the opening
+//! closed for `settle_time`, then the gate opens and it discharges freely, or (`forced`) a
+//! plate pushes the top down at `plate_speed`. The run ends at `time.end` (settling included;
+//! the paper: 12 s free, 2 s forced). Monitored: time after the release, discharged mass
+//! fraction, kinetic energy, mean and largest temperature rise and where the largest is, the
+//! heat balance (stored against the RVEs' friction heat), the plate force, points through a
+//! wall and the deepest penetration, and the positions of points A and B. Frames: the
+//! material points, and the RVEs of A and B (`rve_0_*`, `rve_1_*`: disks, contact-force
+//! network, cell; B-Fig. 17). The profile `discharge` is the discharged fraction against the
+//! time after the release. The checkpoint holds the `MpmState` with every RVE, the running
+//! sums and the discharge samples.
+
+use serde::{Deserialize, Serialize};
+use thm_coupling::multiscale::RvePoint;
+use thm_coupling::multiscale::silo::{SiloModel, SiloRecord, SiloTest, SiloTotals};
+use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
+use thm_mpm::MpmState;
+
+use crate::run::config::TimeControl;
+use crate::run::error::{ConfigError, RunError};
+use crate::run::profiles::Profile;
+use crate::run::rve_frames::RveFrames;
+use crate::run::scenario::{FrameSink, Scenario};
+use crate::run::summary::SummaryRow;
+use crate::run::units::{Length, Quantity, Temperature, Time, Velocity};
+
+/// `[silo]`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SiloParams {
+    /// Whether a plate pushes the top down (forced discharge).
+    pub forced: bool,
+    /// Cell size; the silo's 1 m and the opening's 0.2 m must be whole cells (the paper:
+    /// 0.05 m).
+    pub cell_size: Quantity<Length>,
+    /// Points per cell along each direction, in [1, 4] (the paper: 2).
+    pub points_per_cell: usize,
+    /// Disks per RVE, in [10, 10000] (the paper: 400).
+    pub disks: usize,
+    /// Seed of the packing.
+    #[serde(default = "one")]
+    pub seed: u64,
+    /// Density scaling of the RVE disks (DEM time rule), in [1, 1e6].
+    pub density_scaling: f64,
+    /// Settling time with the opening closed, shorter than `time.end`.
+    pub settle_time: Quantity<Time>,
+    /// Initial uniform temperature (not stated in the paper; 20 °C).
+    pub initial_temperature: Quantity<Temperature>,
+    /// Plate speed of the forced discharge, downwards (the paper: 0.2 m/s).
+    pub plate_speed: Quantity<Velocity>,
+}
+
+fn one() -> u64 {
+    1
+}
+
+/// The kind's sections of the scenario file.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// `[silo]`.
+    pub silo: SiloParams,
+}
+
+/// What a checkpoint holds.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct State {
+    /// Points with their RVEs.
+    pub mpm: MpmState<RvePoint>,
+    /// Running sums.
+    pub totals: SiloTotals,
+    /// `(time after release, discharged fraction, largest rise)` every [`SAMPLE_EVERY`]
+    /// steps after the release.
+    pub samples: Vec<[f64; 3]>,
+}
+
+/// Steps between discharge samples.
+pub const SAMPLE_EVERY: u64 = 10;
+
+/// The stepper: the model (its `state` is swapped in for each step) and frame scratch.
+#[derive(Debug)]
+pub struct MpmDemSilo {
+    model: SiloModel,
+    rise: Vec<f64>,
+    pressure: Vec<f64>,
+    rve_frames: RveFrames,
+}
+
+impl MpmDemSilo {
+    fn with_state<R>(&mut self, state: &mut State, f: impl FnOnce(&mut SiloModel) -> R) -> R {
+        std::mem::swap(&mut self.model.state, &mut state.mpm);
+        std::mem::swap(&mut self.model.totals, &mut state.totals);
+        let r = f(&mut self.model);
+        std::mem::swap(&mut self.model.state, &mut state.mpm);
+        std::mem::swap(&mut self.model.totals, &mut state.totals);
+        r
+    }
+
+    fn record(&self, state: &State) -> SiloRecord {
+        self.model.record_of(&state.mpm, &state.totals)
+    }
+}
+
+fn check_range(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), ConfigError> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(())
+    } else {
+        Err(ConfigError::new(
+            key,
+            format!("must be in [{lo}, {hi}], got {v}"),
+        ))
+    }
+}
+
+fn check_count(key: &str, v: usize, lo: usize, hi: usize) -> Result<(), ConfigError> {
+    if (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(ConfigError::new(
+            key,
+            format!("must be in [{lo}, {hi}], got {v}"),
+        ))
+    }
+}
+
+impl Scenario for MpmDemSilo {
+    const KIND: &'static str = "mpm_dem_silo";
+    const STATE_VERSION: u32 = 1;
+    type Params = Params;
+    type State = State;
+
+    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::run::scenario::StateArray<'s>> {
+        let mut arrays =
+            crate::run::arrays::point_arrays(&state.mpm.points, &crate::run::arrays::POINTS);
+        arrays.extend(crate::run::arrays::rve_arrays(&state.mpm.material));
+        arrays
+    }
+
+    fn set_array(&mut self, state: &mut State, name: &str, values: &[f64]) -> Result<(), RunError> {
+        use crate::run::arrays::{POINTS, set_point_array, writable_points};
+        if set_point_array(&mut state.mpm.points, &POINTS, name, values)? {
+            return Ok(());
+        }
+        Err(crate::run::scenario::not_writable(
+            name,
+            &writable_points(&POINTS),
+        ))
+    }
+
+    fn init(p: &Params, time: &TimeControl) -> Result<(Self, State), ConfigError> {
+        let s = &p.silo;
+        let h = s.cell_size.positive("silo.cell_size")?;
+        check_range("silo.cell_size", h, 0.005, 0.2)?;
+        check_count("silo.points_per_cell", s.points_per_cell, 1, 4)?;
+        check_count("silo.disks", s.disks, 10, 10_000)?;
+        check_range("silo.density_scaling", s.density_scaling, 1.0, 1e6)?;
+        check_range(
+            "silo.initial_temperature",
+            s.initial_temperature.si(),
+            1.0,
+            1e4,
+        )?;
+        check_range("silo.plate_speed", s.plate_speed.si(), 0.0, 100.0)?;
+        let end = time.dt * time.n_steps as f64;
+        let settle = s.settle_time.si();
+        check_range("silo.settle_time", settle, 0.0, end)?;
+        let mut t = SiloTest::reduced(s.forced, h, s.disks, 1.0, time.dt);
+        for (key, v) in [("silo.cell_size", t.width), ("silo.cell_size", t.opening)] {
+            let n = v / h;
+            if (n - n.round()).abs() > 1e-9 * n.max(1.0) {
+                return Err(ConfigError::new(
+                    key,
+                    format!("{v} m must be a whole number of cells, got cells of {h} m"),
+                ));
+            }
+        }
+        t.points_per_cell = s.points_per_cell;
+        t.seed = s.seed;
+        t.dem_time.density_scaling = s.density_scaling;
+        t.initial_temperature = s.initial_temperature.si() - 273.15;
+        t.plate_speed = s.plate_speed.si();
+        t.settle_time = settle;
+        let settle_steps = t.settle_steps();
+        if settle_steps >= time.n_steps {
+            return Err(ConfigError::new(
+                "time.end",
+                format!(
+                    "must leave steps after the settling ({settle_steps} steps of {} s)",
+                    time.dt
+                ),
+            ));
+        }
+        t.discharge_time = (time.n_steps - settle_steps) as f64 * time.dt;
+        let model = SiloModel::new(&t).map_err(|e| ConfigError::new("silo", e.to_string()))?;
+        let n = model.state.points.len();
+        let state = State {
+            mpm: model.state.clone(),
+            totals: model.totals,
+            samples: Vec::new(),
+        };
+        Ok((
+            Self {
+                model,
+                rise: vec![0.0; n],
+                pressure: vec![0.0; n],
+                rve_frames: RveFrames::default(),
+            },
+            state,
+        ))
+    }
+
+    fn restore(&mut self, state: &State) -> Result<(), RunError> {
+        self.model
+            .restore(state.mpm.clone(), state.totals)
+            .map_err(|e| RunError::Physics {
+                step: state.mpm.step,
+                time: state.mpm.time,
+                message: e.to_string(),
+            })
+    }
+
+    fn step(&mut self, state: &mut State, step: u64, _dt: f64) -> Result<(), RunError> {
+        let time = state.mpm.time;
+        self.with_state(state, |m| m.step())
+            .map_err(|e| RunError::Physics {
+                step,
+                time,
+                message: e.to_string(),
+            })?;
+        if state.totals.released && state.mpm.step.is_multiple_of(SAMPLE_EVERY) {
+            let r = self.record(state);
+            state
+                .samples
+                .push([r.time_after_release, r.discharged_fraction, r.max_rise]);
+        }
+        Ok(())
+    }
+
+    fn monitor_columns(&self) -> Vec<Column> {
+        vec![
+            Column::new("time_after_release", "s"),
+            Column::new("discharged_fraction", "-"),
+            Column::new("kinetic_energy", "J/m"),
+            Column::new("mean_temperature_rise", "K"),
+            Column::new("largest_temperature_rise", "K"),
+            Column::new("hottest_x", "m"),
+            Column::new("hottest_y", "m"),
+            Column::new("stored_heat", "J/m"),
+            Column::new("friction_heat", "J/m"),
+            Column::new("heat_balance_residual", "-"),
+            Column::new("plate_force", "N/m"),
+            Column::new("points_through_walls", "-"),
+            Column::new("deepest_penetration", "m"),
+            Column::new("point_a_x", "m"),
+            Column::new("point_a_y", "m"),
+            Column::new("point_b_x", "m"),
+            Column::new("point_b_y", "m"),
+        ]
+    }
+
+    fn monitor(&self, state: &State, values: &mut Vec<f64>) {
+        let r = self.record(state);
+        values.extend([
+            r.time_after_release,
+            r.discharged_fraction,
+            r.kinetic_energy,
+            r.mean_rise,
+            r.max_rise,
+            r.hottest[0],
+            r.hottest[1],
+            r.stored_heat,
+            r.source_heat,
+            r.heat_balance_residual,
+            r.plate_force,
+            r.escaped as f64,
+            r.deepest_penetration,
+            r.point_a[0],
+            r.point_a[1],
+            r.point_b[0],
+            r.point_b[1],
+        ]);
+    }
+
+    fn frame(&mut self, state: &State, sink: &mut FrameSink<'_>) -> Result<(), IoError> {
+        let p = &state.mpm.points;
+        let t0 = self.model.test.initial_temperature;
+        for k in 0..p.len() {
+            self.rise[k] = p.temperature[k] - t0;
+            self.pressure[k] = -0.5 * (p.stress[k][0] + p.stress[k][1]);
+        }
+        let grid = UnstructuredGrid::particles(&p.position)
+            .with_point_field("temperature_rise [K]", FieldValues::Scalar(&self.rise))
+            .with_point_field(
+                "mean_pressure [Pa] (compression +)",
+                FieldValues::Scalar(&self.pressure),
+            )
+            .with_point_field("heat_source [W/m^3]", FieldValues::Scalar(&p.heat_source))
+            .with_point_field("velocity [m/s]", FieldValues::Vector2(&p.velocity));
+        sink("material_points", &grid)?;
+        for (k, &i) in self.model.tracked().iter().enumerate() {
+            if let Some(point) = state.mpm.material.get(i) {
+                self.rve_frames
+                    .write(&format!("rve_{k}"), &point.rve, sink)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn profiles(&self, state: &State, _time: f64) -> Vec<Profile> {
+        let x: Vec<f64> = state.samples.iter().map(|s| s[0]).collect();
+        vec![
+            Profile {
+                name: "discharge".into(),
+                x_label: "time after release [s]".into(),
+                y_label: "discharged mass fraction [-]".into(),
+                x: x.clone(),
+                y: state.samples.iter().map(|s| s[1]).collect(),
+                reference: None,
+            },
+            Profile {
+                name: "largest_temperature_rise".into(),
+                x_label: "time after release [s]".into(),
+                y_label: "largest temperature rise [K]".into(),
+                x,
+                y: state.samples.iter().map(|s| s[2]).collect(),
+                reference: None,
+            },
+        ]
+    }
+
+    fn summary(&self, state: &State, _time: f64) -> Vec<SummaryRow> {
+        let r = self.record(state);
+        let row = |q: &str, unit: &str, measured: f64, reference: Option<f64>| SummaryRow {
+            quantity: q.into(),
+            unit: unit.into(),
+            measured,
+            reference,
+        };
+        vec![
+            row("discharged mass fraction", "-", r.discharged_fraction, None),
+            row("largest temperature rise", "K", r.max_rise, None),
+            row(
+                "height of the hottest point above the opening",
+                "m",
+                r.hottest[1] - self.model.test.outlet_height,
+                None,
+            ),
+            row("mean temperature rise", "K", r.mean_rise, None),
+            row(
+                "stored heat (reference: friction heat of the RVEs)",
+                "J/m",
+                r.stored_heat,
+                Some(r.source_heat),
+            ),
+            row("points through a wall", "-", r.escaped as f64, Some(0.0)),
+            row(
+                "material points (the paper: 1088 at 0.05 m cells)",
+                "-",
+                self.model.points() as f64,
+                None,
+            ),
+        ]
+    }
+}

@@ -1,0 +1,182 @@
+//! `thm run` of the `mpm_dem_silo` kind (B-Sect. 5.3.2 on the MPM×DEM scheme): both shipped
+//! files are read and their silos built and stepped past the gate's opening, a tiny copy
+//! resumed from a checkpoint before the opening ends with the same bits, 1 and 2 threads write
+//! the same checkpoint, and bad values name their key.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn thm() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_thm"))
+}
+
+fn shipped(mode: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join(format!("../../scenarios/mpm_dem_silo_{mode}.toml"))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("thm-silo-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn edit(text: String, from: &str, to: &str) -> String {
+    assert!(
+        text.contains(from),
+        "the shipped file changed: `{from}` not found"
+    );
+    text.replace(from, to)
+}
+
+/// A shipped file shortened to 10 ms of settling and 10 ms after the opening.
+fn short(dir: &Path, mode: &str, more: impl Fn(String) -> String) -> PathBuf {
+    let text = std::fs::read_to_string(shipped(mode)).unwrap();
+    let end = if mode == "free" {
+        "end = \"2.7 s\""
+    } else {
+        "end = \"1.2 s\""
+    };
+    let text = edit(text, end, "end = \"20 ms\"");
+    let text = edit(text, "settle_time = \"0.2 s\"", "settle_time = \"10 ms\"");
+    let text = edit(text, "history_every = 20", "history_every = 2");
+    let text = edit(text, "frame_every = 200", "frame_every = 10");
+    let text = edit(text, "checkpoint_every = 1000", "checkpoint_every = 6");
+    let file = dir.join(format!("{mode}.toml"));
+    std::fs::write(&file, more(text)).unwrap();
+    file
+}
+
+fn run(
+    file: &Path,
+    out: &Path,
+    resume: Option<&Path>,
+    threads: Option<usize>,
+) -> std::process::Output {
+    let mut c = thm();
+    c.arg("run").arg(file).arg("--out").arg(out);
+    if let Some(r) = resume {
+        c.arg("--resume").arg(r);
+    }
+    if let Some(n) = threads {
+        c.env("RAYON_NUM_THREADS", n.to_string());
+    }
+    c.output().unwrap()
+}
+
+#[test]
+fn shipped_files_run_past_the_opening() {
+    let dir = scratch("shipped");
+    for mode in ["free", "forced"] {
+        let file = short(&dir, mode, |t| t);
+        let out = dir.join(mode);
+        let o = run(&file, &out, None, None);
+        assert!(
+            o.status.success(),
+            "{mode}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
+        let header = history.lines().next().unwrap();
+        for c in [
+            "discharged_fraction",
+            "heat_balance_residual",
+            "points_through_walls",
+            "plate_force",
+        ] {
+            assert!(header.contains(c), "{mode}: {header}");
+        }
+        assert!(out.join("rve_0_disks.pvd").is_file() && out.join("rve_1_disks.pvd").is_file());
+        assert!(out.join("summary.md").is_file());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A tiny forced silo (0.2 m cells, 30-disk RVEs) resumed from the checkpoint at step 6,
+/// before the gate opens at step 10, ends with the same bytes as the run not interrupted; the
+/// same run on 1 and on 2 threads writes the same last checkpoint.
+#[test]
+fn resumed_across_the_opening_and_thread_counts_give_the_same_bits() {
+    let dir = scratch("resume");
+    let file = short(&dir, "forced", |t| {
+        let t = edit(t, "cell_size = \"0.1 m\"", "cell_size = \"0.2 m\"");
+        edit(t, "disks = 60", "disks = 30")
+    });
+    let full = dir.join("full");
+    let o = run(&file, &full, None, Some(2));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let again = dir.join("again");
+    let o = run(
+        &file,
+        &again,
+        Some(&full.join("checkpoints/step_0000000006.ckpt")),
+        Some(2),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let one = dir.join("one");
+    let o = run(&file, &one, None, Some(1));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let last = "checkpoints/step_0000000020.ckpt";
+    let bytes = |d: &Path| std::fs::read(d.join(last)).unwrap();
+    assert_eq!(bytes(&full), bytes(&again));
+    assert_eq!(bytes(&full), bytes(&one));
+    // The resumed run's history starts at the checkpoint: its rows equal the last ones.
+    let tail = |d: &Path| {
+        let h = std::fs::read_to_string(d.join("history.csv")).unwrap();
+        h.lines()
+            .rev()
+            .take(4)
+            .map(str::to_string)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(tail(&full), tail(&again));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_silo_values_name_their_key() {
+    let dir = scratch("bad");
+    for (from, to, key) in [
+        (
+            "cell_size = \"0.1 m\"",
+            "cell_size = \"0.03 m\"",
+            "silo.cell_size",
+        ),
+        (
+            "cell_size = \"0.1 m\"",
+            "cell_size = \"3 MPa\"",
+            "silo.cell_size",
+        ),
+        ("disks = 60", "disks = 5", "silo.disks"),
+        (
+            "density_scaling = 1e5",
+            "density_scaling = 0.5",
+            "silo.density_scaling",
+        ),
+        (
+            "points_per_cell = 2",
+            "points_per_cell = 9",
+            "silo.points_per_cell",
+        ),
+        (
+            "settle_time = \"10 ms\"",
+            "settle_time = \"1 s\"",
+            "silo.settle_time",
+        ),
+        (
+            "plate_speed = \"0.2 m/s\"",
+            "plate_speed = \"-1 m/s\"",
+            "silo.plate_speed",
+        ),
+        ("forced = true", "forced = 1", "forced"),
+        ("seed = 1", "seed = 1\ncolour = 2", "colour"),
+    ] {
+        let file = short(&dir, "forced", |t| edit(t, from, to));
+        let o = run(&file, &dir.join("out"), None, None);
+        assert!(!o.status.success(), "{key}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(key), "{key}: {err}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
