@@ -459,7 +459,7 @@ impl SiloModel {
             // Across the silo, material below, moving down; at the release (t = settle_time,
             // the MPM time of the walls) it is at the initial top of the sample.
             let at = t.top() + t.plate_speed * t.settle_steps() as f64 * t.time_step;
-            let mut plate = RigidWall::segment([w, at], [0.0, at], t.plate_friction, h);
+            let mut plate = RigidWall::segment([w, at], [0.0, at], t.plate_friction, band);
             plate.velocity = [0.0, -t.plate_speed];
             plate_wall = Some(discharge.walls.len());
             discharge.walls.push(plate);
