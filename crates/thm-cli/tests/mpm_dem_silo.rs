@@ -89,6 +89,27 @@ fn shipped_files_run_past_the_opening() {
             assert!(header.contains(c), "{mode}: {header}");
         }
         assert!(out.join("rve_0_disks.pvd").is_file() && out.join("rve_1_disks.pvd").is_file());
+        // The material-point frames carry the per-point RVE fields.
+        let frames: Vec<PathBuf> = std::fs::read_dir(out.join("material_points"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        assert!(!frames.is_empty());
+        let vtu = std::fs::read(&frames[0]).unwrap();
+        let text = String::from_utf8_lossy(&vtu);
+        for field in [
+            "deviatoric_strain",
+            "rve_void_ratio",
+            "rve_coordination",
+            "rve_intact_bonds",
+            "temperature_rise",
+        ] {
+            assert!(
+                text.contains(field),
+                "{mode}: {field} missing from {}",
+                frames[0].display()
+            );
+        }
         assert!(out.join("summary.md").is_file());
     }
     std::fs::remove_dir_all(&dir).unwrap();

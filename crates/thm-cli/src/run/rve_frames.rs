@@ -135,3 +135,60 @@ mod tests {
         );
     }
 }
+
+/// Scratch for the per-point RVE fields of the material-point frames of the MPM×DEM kinds:
+/// `ε_q` of B-Eq. 48 (n = 2) from the point's accumulated small strain, the RVE's void ratio
+/// (void over solid area), coordination number and intact bonds.
+#[derive(Debug, Default)]
+pub struct PointRveFields {
+    /// `ε_q` per point.
+    pub deviatoric_strain: Vec<f64>,
+    /// Void ratio per point.
+    pub void_ratio: Vec<f64>,
+    /// Coordination number per point.
+    pub coordination: Vec<f64>,
+    /// Intact bonds per point.
+    pub intact_bonds: Vec<f64>,
+}
+
+impl PointRveFields {
+    /// Fills the fields from the points' strains and their RVEs.
+    pub fn fill(
+        &mut self,
+        strain: &[thm_mpm::points::Sym2],
+        material: &[thm_coupling::multiscale::RvePoint],
+    ) {
+        self.deviatoric_strain.clear();
+        self.deviatoric_strain.extend(strain.iter().map(|e| {
+            let half = 0.5 * (e[0] - e[1]);
+            (2.0 * (half * half + e[2] * e[2])).sqrt()
+        }));
+        self.void_ratio.clear();
+        self.void_ratio
+            .extend(material.iter().map(|p| p.rve.void_ratio()));
+        self.coordination.clear();
+        self.coordination
+            .extend(material.iter().map(|p| p.rve.coordination_number()));
+        self.intact_bonds.clear();
+        self.intact_bonds.extend(
+            material
+                .iter()
+                .map(|p| p.rve.contacts.intact_bond_count() as f64),
+        );
+    }
+
+    /// Adds the four fields to `grid`.
+    pub fn add_to<'a>(&'a self, grid: UnstructuredGrid<'a>) -> UnstructuredGrid<'a> {
+        self.add_rve_to(grid.with_point_field(
+            "deviatoric_strain",
+            FieldValues::Scalar(&self.deviatoric_strain),
+        ))
+    }
+
+    /// Adds the three RVE fields (void ratio, coordination, intact bonds) to `grid`.
+    pub fn add_rve_to<'a>(&'a self, grid: UnstructuredGrid<'a>) -> UnstructuredGrid<'a> {
+        grid.with_point_field("rve_void_ratio", FieldValues::Scalar(&self.void_ratio))
+            .with_point_field("rve_coordination", FieldValues::Scalar(&self.coordination))
+            .with_point_field("rve_intact_bonds", FieldValues::Scalar(&self.intact_bonds))
+    }
+}

@@ -112,6 +112,7 @@ pub struct MpmDemBiaxial {
     /// Bonds installed in all RVEs after the consolidation.
     bonds_installed: usize,
     rve_frames: RveFrames,
+    rve_fields: crate::run::rve_frames::PointRveFields,
 }
 
 impl MpmDemBiaxial {
@@ -315,6 +316,7 @@ impl Scenario for MpmDemBiaxial {
                 tracked,
                 bonds_installed,
                 rve_frames: RveFrames::default(),
+                rve_fields: Default::default(),
             },
             state,
         ))
@@ -420,7 +422,8 @@ impl Scenario for MpmDemBiaxial {
             .with_point_field("heat_source [W/m^3]", FieldValues::Scalar(&p.heat_source))
             .with_point_field("rve_kinetic_ratio", FieldValues::Scalar(&self.kinetic))
             .with_point_field("velocity [m/s]", FieldValues::Vector2(&p.velocity));
-        sink("material_points", &grid)?;
+        self.rve_fields.fill(&p.strain, &state.mpm.material);
+        sink("material_points", &self.rve_fields.add_rve_to(grid))?;
         for (k, &i) in self.tracked.iter().enumerate() {
             if let Some(point) = state.mpm.material.get(i) {
                 self.rve_frames

@@ -98,6 +98,7 @@ pub struct MpmDemColumn {
     rise: Vec<f64>,
     pressure: Vec<f64>,
     bonds: Vec<f64>,
+    rve_fields: crate::run::rve_frames::PointRveFields,
 }
 
 impl MpmDemColumn {
@@ -233,6 +234,7 @@ impl Scenario for MpmDemColumn {
                 rise: vec![0.0; n],
                 pressure: vec![0.0; n],
                 bonds: vec![0.0; n],
+                rve_fields: Default::default(),
             },
             state,
         ))
@@ -329,7 +331,8 @@ impl Scenario for MpmDemColumn {
             .with_point_field("intact_bonds", FieldValues::Scalar(&self.bonds))
             .with_point_field("heat_source [W/m^3]", FieldValues::Scalar(&p.heat_source))
             .with_point_field("velocity [m/s]", FieldValues::Vector2(&p.velocity));
-        sink("material_points", &grid)
+        self.rve_fields.fill(&p.strain, &state.mpm.material);
+        sink("material_points", &self.rve_fields.add_to(grid))
     }
 
     fn profiles(&self, state: &State, _time: f64) -> Vec<Profile> {

@@ -25,7 +25,7 @@ use thm_mpm::MpmState;
 use crate::run::config::TimeControl;
 use crate::run::error::{ConfigError, RunError};
 use crate::run::profiles::Profile;
-use crate::run::rve_frames::RveFrames;
+use crate::run::rve_frames::{PointRveFields, RveFrames};
 use crate::run::scenario::{FrameSink, Scenario};
 use crate::run::summary::SummaryRow;
 use crate::run::units::{Length, Quantity, Temperature, Time, Velocity};
@@ -90,6 +90,7 @@ pub struct MpmDemSilo {
     model: SiloModel,
     rise: Vec<f64>,
     pressure: Vec<f64>,
+    rve_fields: PointRveFields,
     rve_frames: RveFrames,
 }
 
@@ -210,6 +211,7 @@ impl Scenario for MpmDemSilo {
                 model,
                 rise: vec![0.0; n],
                 pressure: vec![0.0; n],
+                rve_fields: PointRveFields::default(),
                 rve_frames: RveFrames::default(),
             },
             state,
@@ -303,7 +305,8 @@ impl Scenario for MpmDemSilo {
             )
             .with_point_field("heat_source [W/m^3]", FieldValues::Scalar(&p.heat_source))
             .with_point_field("velocity [m/s]", FieldValues::Vector2(&p.velocity));
-        sink("material_points", &grid)?;
+        self.rve_fields.fill(&p.strain, &state.mpm.material);
+        sink("material_points", &self.rve_fields.add_to(grid))?;
         for (k, &i) in self.model.tracked().iter().enumerate() {
             if let Some(point) = state.mpm.material.get(i) {
                 self.rve_frames
