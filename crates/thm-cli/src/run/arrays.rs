@@ -192,3 +192,30 @@ pub fn rve_arrays(material: &[thm_coupling::multiscale::RvePoint]) -> Vec<StateA
         owned("point_friction_work", "J", &|p| p.friction_work),
     ]
 }
+
+/// The arrays of an MPM×DEM kind with one set of points: the points' and their RVEs'.
+pub fn mpm_rve_arrays<'a>(
+    points: &'a MaterialPoints,
+    material: &[thm_coupling::multiscale::RvePoint],
+) -> Vec<StateArray<'a>> {
+    let mut arrays = point_arrays(points, &POINTS);
+    arrays.extend(rve_arrays(material));
+    arrays
+}
+
+/// Writes a writable point array of a kind with one set of points, or names the writable
+/// ones.
+pub fn set_points_array(
+    points: &mut MaterialPoints,
+    name: &str,
+    values: &[f64],
+) -> Result<(), RunError> {
+    if set_point_array(points, &POINTS, name, values)? {
+        Ok(())
+    } else {
+        Err(super::scenario::not_writable(
+            name,
+            &writable_points(&POINTS),
+        ))
+    }
+}

@@ -89,6 +89,30 @@ macro_rules! with_kind {
     };
 }
 
+/// `v` finite and in `[lo, hi]`, else an error at `key` naming the range.
+pub(crate) fn check_range(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), ConfigError> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(())
+    } else {
+        Err(ConfigError::new(
+            key,
+            format!("must be in [{lo}, {hi}], got {v}"),
+        ))
+    }
+}
+
+/// `v` in `[lo, hi]`, else an error at `key` naming the range.
+pub(crate) fn check_count(key: &str, v: usize, lo: usize, hi: usize) -> Result<(), ConfigError> {
+    if (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(ConfigError::new(
+            key,
+            format!("must be in [{lo}, {hi}], got {v}"),
+        ))
+    }
+}
+
 fn unknown_kind(other: &str) -> ConfigError {
     ConfigError::new(
         "kind",

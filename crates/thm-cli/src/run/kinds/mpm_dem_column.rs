@@ -20,6 +20,7 @@ use thm_coupling::multiscale::column::{ColumnModel, ColumnRecord, ColumnTest, Co
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 use thm_mpm::MpmState;
 
+use super::{check_count, check_range};
 use crate::run::config::TimeControl;
 use crate::run::error::{ConfigError, RunError};
 use crate::run::profiles::Profile;
@@ -117,28 +118,6 @@ impl MpmDemColumn {
     }
 }
 
-fn check_range(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), ConfigError> {
-    if v.is_finite() && v >= lo && v <= hi {
-        Ok(())
-    } else {
-        Err(ConfigError::new(
-            key,
-            format!("must be in [{lo}, {hi}], got {v}"),
-        ))
-    }
-}
-
-fn check_count(key: &str, v: usize, lo: usize, hi: usize) -> Result<(), ConfigError> {
-    if (lo..=hi).contains(&v) {
-        Ok(())
-    } else {
-        Err(ConfigError::new(
-            key,
-            format!("must be in [{lo}, {hi}], got {v}"),
-        ))
-    }
-}
-
 impl Scenario for MpmDemColumn {
     const KIND: &'static str = "mpm_dem_column";
     const STATE_VERSION: u32 = 1;
@@ -146,21 +125,11 @@ impl Scenario for MpmDemColumn {
     type State = State;
 
     fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::run::scenario::StateArray<'s>> {
-        let mut arrays =
-            crate::run::arrays::point_arrays(&state.mpm.points, &crate::run::arrays::POINTS);
-        arrays.extend(crate::run::arrays::rve_arrays(&state.mpm.material));
-        arrays
+        crate::run::arrays::mpm_rve_arrays(&state.mpm.points, &state.mpm.material)
     }
 
     fn set_array(&mut self, state: &mut State, name: &str, values: &[f64]) -> Result<(), RunError> {
-        use crate::run::arrays::{POINTS, set_point_array, writable_points};
-        if set_point_array(&mut state.mpm.points, &POINTS, name, values)? {
-            return Ok(());
-        }
-        Err(crate::run::scenario::not_writable(
-            name,
-            &writable_points(&POINTS),
-        ))
+        crate::run::arrays::set_points_array(&mut state.mpm.points, name, values)
     }
 
     fn init(p: &Params, time: &TimeControl) -> Result<(Self, State), ConfigError> {

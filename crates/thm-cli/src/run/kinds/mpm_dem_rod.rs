@@ -83,10 +83,7 @@ impl Scenario for MpmDemRod {
     type State = MpmState<RvePoint>;
 
     fn arrays<'s>(&'s self, state: &'s Self::State) -> Vec<crate::run::scenario::StateArray<'s>> {
-        let mut arrays =
-            crate::run::arrays::point_arrays(&state.points, &crate::run::arrays::POINTS);
-        arrays.extend(crate::run::arrays::rve_arrays(&state.material));
-        arrays
+        crate::run::arrays::mpm_rve_arrays(&state.points, &state.material)
     }
 
     fn set_array(
@@ -95,14 +92,7 @@ impl Scenario for MpmDemRod {
         name: &str,
         values: &[f64],
     ) -> Result<(), RunError> {
-        use crate::run::arrays::{POINTS, set_point_array, writable_points};
-        if set_point_array(&mut state.points, &POINTS, name, values)? {
-            return Ok(());
-        }
-        Err(crate::run::scenario::not_writable(
-            name,
-            &writable_points(&POINTS),
-        ))
+        crate::run::arrays::set_points_array(&mut state.points, name, values)
     }
 
     fn init(p: &Params, time: &TimeControl) -> Result<(Self, Self::State), ConfigError> {

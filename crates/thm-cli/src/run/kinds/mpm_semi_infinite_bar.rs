@@ -87,14 +87,7 @@ impl Scenario for SemiInfiniteBar {
         name: &str,
         values: &[f64],
     ) -> Result<(), RunError> {
-        use crate::run::arrays::{POINTS, set_point_array, writable_points};
-        if set_point_array(&mut state.points, &POINTS, name, values)? {
-            return Ok(());
-        }
-        Err(crate::run::scenario::not_writable(
-            name,
-            &writable_points(&POINTS),
-        ))
+        crate::run::arrays::set_points_array(&mut state.points, name, values)
     }
 
     fn init(p: &Params, time: &TimeControl) -> Result<(Self, Self::State), ConfigError> {
