@@ -113,6 +113,7 @@ fn main() {
             assert_eq!(a, b, "owned RVE {i} on rank {rank}");
         }
     }
+    let (compute, comm) = (dist.compute_seconds, dist.comm_seconds);
     let work: f64 = serial.material.iter().map(|p| p.friction_work).sum();
     assert!(work > 0.0, "no sliding: the test would not see the heat");
 
@@ -152,6 +153,9 @@ fn main() {
     let msg = e.to_string();
     assert!(msg.contains(&format!("rank {last}")), "{msg}");
     println!(
-        "rank {rank}/{size}: {STEPS} steps bit-identical to the serial run (block {mine:?}); failure: {msg}"
+        "rank {rank}/{size}: {STEPS} steps bit-identical to the serial run (block {mine:?}); \
+         per step: RVE block {:.3} ms, communication {:.3} ms; failure: {msg}",
+        1e3 * compute / STEPS as f64,
+        1e3 * comm / STEPS as f64,
     );
 }
