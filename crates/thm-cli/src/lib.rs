@@ -12,4 +12,6 @@
 
 pub mod calibrate;
 pub mod eos;
+#[cfg(feature = "mpi")]
+pub mod mpi_rve;
 pub mod run;

@@ -32,8 +32,8 @@ pub struct MaterialInput {
     pub dt: f64,
 }
 
-/// What a material returns.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// What a material returns (the default: all zero).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct MaterialResponse {
     /// Stress at the end of the step `[σxx, σyy, σxy]` (Pa).
     pub stress: Sym2,

@@ -46,6 +46,101 @@ impl AsRef<RveState> for RvePoint {
     }
 }
 
+/// What one material point's exchange produces, a fixed-size record (15 numbers): all a
+/// process that did not step the point's RVE needs to continue the MPM step bit for bit
+/// (the response, and the diagnostics the time-step limit and the checks read).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PointOutcome {
+    /// Stress, heat source and conductivity for the point ([`stages::mpm_response`]).
+    pub response: MaterialResponse,
+    /// See [`RvePoint::wave_modulus`].
+    pub wave_modulus: f64,
+    /// See [`RvePoint::friction_work`].
+    pub friction_work: f64,
+    /// See [`RvePoint::rve_volume`].
+    pub rve_volume: f64,
+    /// See [`RvePoint::inertial_number`].
+    pub inertial_number: f64,
+    /// See [`RvePoint::kinetic_ratio`].
+    pub kinetic_ratio: f64,
+    /// See [`RvePoint::substeps`].
+    pub substeps: u32,
+}
+
+impl PointOutcome {
+    /// Writes the diagnostics into `point`, counts its step and returns its response.
+    pub fn apply(&self, point: &mut RvePoint) -> MaterialResponse {
+        point.wave_modulus = self.wave_modulus;
+        point.friction_work = self.friction_work;
+        point.rve_volume = self.rve_volume;
+        point.inertial_number = self.inertial_number;
+        point.kinetic_ratio = self.kinetic_ratio;
+        point.substeps = self.substeps;
+        point.steps += 1;
+        self.response
+    }
+}
+
+/// The cost measure [`partition`] balances by: the point's contacts × DEM substeps of its
+/// last step (at least 1 each, so a fresh RVE counts its contacts). Deterministic: the same
+/// on every process holding the point's history.
+pub fn rve_cost(point: &RvePoint) -> f64 {
+    let contacts = point.rve.contacts.force_on_b.len().max(1) as f64;
+    contacts * f64::from(point.substeps.max(1))
+}
+
+/// Contiguous blocks of points, one per process, balanced by a per-point cost (e.g. the
+/// previous step's contacts × substeps): block `r` ends at the first point whose cost prefix
+/// sum reaches `(r + 1)/parts` of the total. Deterministic (the same costs give the same
+/// blocks on every process); every block is non-empty when `parts ≤ costs.len()` (otherwise the first `costs.len()`
+/// blocks hold one point each). Costs that
+/// are negative or not finite count as 0; all-zero costs split by point count.
+pub fn partition(costs: &[f64], parts: usize) -> Vec<std::ops::Range<usize>> {
+    let parts = parts.max(1);
+    let n = costs.len();
+    let clean: Vec<f64> = costs
+        .iter()
+        .map(|&c| if c.is_finite() && c > 0.0 { c } else { 0.0 })
+        .collect();
+    let total: f64 = clean.iter().sum();
+    let mut ranges = Vec::with_capacity(parts);
+    let mut start = 0;
+    let mut prefix = 0.0;
+    let mut i = 0;
+    for r in 0..parts {
+        let left = parts - r - 1;
+        let mut end = if r + 1 == parts {
+            n
+        } else if total > 0.0 {
+            let target = total * (r + 1) as f64 / parts as f64;
+            while i < n && prefix + clean[i] <= target {
+                prefix += clean[i];
+                i += 1;
+            }
+            i
+        } else {
+            n * (r + 1) / parts
+        };
+        // Keep one point for this block and for each later one where there are enough.
+        end = if n >= parts {
+            end.clamp(start + 1, n - left)
+        } else {
+            (start + 1).min(n)
+        };
+        while i < end {
+            prefix += clean[i];
+            i += 1;
+        }
+        while i > end {
+            i -= 1;
+            prefix -= clean[i];
+        }
+        ranges.push(start..end);
+        start = end;
+    }
+    ranges
+}
+
 /// An RVE per material point, stepped as one batch (`thm_rve::RveBatch`, rayon; nothing is
 /// reduced across RVEs, so any number of threads gives the same bits). Holds the validated
 /// parameters, the template packing and scratch only.
@@ -57,6 +152,7 @@ pub struct RveMaterial {
     loads: Vec<RveLoad>,
     rve_responses: Vec<RveResponse>,
     totals: Vec<f64>,
+    outcomes: Vec<PointOutcome>,
 }
 
 /// Relative tolerance of the packing check (disk mass against `ρ π R₀² z_p`).
@@ -114,6 +210,7 @@ impl RveMaterial {
             loads: Vec::new(),
             rve_responses: Vec::new(),
             totals: Vec::new(),
+            outcomes: Vec::new(),
         })
     }
 
@@ -160,7 +257,9 @@ impl RveMaterial {
         self.initial_response().conductivity
     }
 
-    /// The stage sequence of one exchange for all points (see [`super::stages`]).
+    /// The stage sequence of one exchange for all points (see [`super::stages`]): every
+    /// point's block is stepped here ([`RveMaterial::step_block`] over `0..n`), then the
+    /// outcomes are applied and checked.
     fn exchange(
         &mut self,
         states: &mut [RvePoint],
@@ -172,6 +271,39 @@ impl RveMaterial {
             return Err(thm_mpm::MpmError::MaterialStateCount {
                 states: states.len(),
                 points: n,
+            }
+            .into());
+        }
+        let mut outcomes = std::mem::take(&mut self.outcomes);
+        outcomes.resize(n, PointOutcome::default());
+        let stepped = self.step_block(states, inputs, 0, &mut outcomes);
+        if stepped.is_ok() {
+            self.finish(states, &outcomes, responses);
+        }
+        self.outcomes = outcomes;
+        stepped?;
+        self.check_quasi_static(states)
+    }
+
+    /// Lines 12–19 of B-Algorithm 1 for the contiguous block of points `states` (the points
+    /// `first..first + states.len()` of the material, `inputs` theirs): their DEM steps as one
+    /// batch, then each point's [`PointOutcome`] into `outcomes`. Each RVE is stepped alone,
+    /// so stepping the points in blocks (one per process, in any order) gives the same bits
+    /// as one block of all points; this is the seam a distributed run splits at, exchanging
+    /// only the fixed-size outcomes. The states' RVEs are advanced; their diagnostics are set
+    /// by [`PointOutcome::apply`]. Errors name the failing point by its material index.
+    pub fn step_block(
+        &mut self,
+        states: &mut [RvePoint],
+        inputs: &[MaterialInput],
+        first: usize,
+        outcomes: &mut [PointOutcome],
+    ) -> Result<(), MultiscaleError> {
+        let n = states.len();
+        if inputs.len() != n || outcomes.len() != n {
+            return Err(thm_mpm::MpmError::MaterialStateCount {
+                states: n,
+                points: inputs.len().min(outcomes.len()),
             }
             .into());
         }
@@ -195,14 +327,14 @@ impl RveMaterial {
         self.totals
             .extend(states.iter().map(|s| s.rve.friction_heat_total));
         // Line 16: every RVE's DEM steps, as one batch.
-        if let Err((point, source)) =
+        if let Err((local, source)) =
             self.batch
                 .respond_into(states, &self.loads, &mut self.rve_responses)
         {
-            let s = states.get(point).map(|s| s.rve.cell.strain());
+            let s = states.get(local).map(|s| s.rve.cell.strain());
             return Err(MultiscaleError::Rve {
-                point,
-                step: states.get(point).map_or(0, |s| s.steps),
+                point: first + local,
+                step: states.get(local).map_or(0, |s| s.steps),
                 volumetric_strain: s.map_or(f64::NAN, |s| s.volumetric),
                 deviatoric_strain: s.map_or(f64::NAN, |s| s.deviatoric),
                 source,
@@ -212,17 +344,13 @@ impl RveMaterial {
         // quasi-static measures.
         let scaling = params.dem_time.density_scaling;
         states
-            .par_iter_mut()
-            .zip(responses.par_iter_mut())
+            .par_iter()
+            .zip(outcomes.par_iter_mut())
             .zip(inputs.par_iter().zip(&self.rve_responses).zip(&self.loads))
             .zip(self.totals.par_iter())
             .for_each(|(((point, out), ((input, r), load)), before)| {
-                *out = stages::mpm_response(r);
                 let measures = stages::contact_measures(&point.rve, p);
                 let [dx, dy] = measures.axial_moduli;
-                point.wave_modulus = dx.max(dy);
-                point.friction_work = point.rve.friction_heat_total - before;
-                point.rve_volume = point.rve.volume(p.thickness);
                 let (i, k) = stages::quasi_static_measures_with(
                     &point.rve,
                     p,
@@ -231,11 +359,35 @@ impl RveMaterial {
                     &r.stress,
                     measures.elastic_energy,
                 );
-                point.inertial_number = i;
-                point.kinetic_ratio = k;
-                point.substeps = load.substeps;
-                point.steps += 1;
+                *out = PointOutcome {
+                    response: stages::mpm_response(r),
+                    wave_modulus: dx.max(dy),
+                    friction_work: point.rve.friction_heat_total - before,
+                    rve_volume: point.rve.volume(p.thickness),
+                    inertial_number: i,
+                    kinetic_ratio: k,
+                    substeps: load.substeps,
+                };
             });
+        Ok(())
+    }
+
+    /// Applies every point's outcome (all blocks gathered, in point order) to its history and
+    /// response.
+    pub fn finish(
+        &self,
+        states: &mut [RvePoint],
+        outcomes: &[PointOutcome],
+        responses: &mut [MaterialResponse],
+    ) {
+        for ((point, out), r) in states.iter_mut().zip(outcomes).zip(responses) {
+            *r = out.apply(point);
+        }
+    }
+
+    /// The quasi-static check of the parameters over all points (lowest failing point first).
+    pub fn check_quasi_static(&self, states: &[RvePoint]) -> Result<(), MultiscaleError> {
+        let params = self.config.params();
         if let Some(limits) = params.quasi_static {
             for (i, s) in states.iter().enumerate() {
                 let checks = [

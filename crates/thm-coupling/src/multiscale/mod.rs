@@ -162,7 +162,7 @@ pub mod verification;
 pub use biaxial::{BiaxialModel, BiaxialTest, Compaction};
 pub use column::{ColumnModel, ColumnTest};
 pub use error::MultiscaleError;
-pub use material::{RveMaterial, RvePoint};
+pub use material::{PointOutcome, RveMaterial, RvePoint, partition, rve_cost};
 pub use params::{DemTimeRule, MultiscaleConfig, MultiscaleParams, QuasiStaticLimits};
 pub use rod::{GranularRod, RodModel};
 pub use silo::{SiloModel, SiloTest};
