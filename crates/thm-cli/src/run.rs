@@ -59,31 +59,112 @@ pub fn run_file(
     interrupt: &AtomicBool,
     progress: Progress,
 ) -> Result<Outcome, RunError> {
-    let doc = config::read_document(file)?;
+    run_file_on(file, out, resume, interrupt, progress, None)
+}
+
+/// [`run_file`] on the processes of a distributed run (every process calls it; see
+/// [`scenario::Run::open_on`]).
+pub fn run_file_on(
+    file: &Path,
+    out: &Path,
+    resume: Option<&Path>,
+    interrupt: &AtomicBool,
+    progress: Progress,
+    processes: Option<Arc<dyn thm_coupling::multiscale::Collective>>,
+) -> Result<Outcome, RunError> {
+    let doc = config::read_document(file);
+    // A file that one process cannot read must stop every process.
+    if let Some(c) = &processes
+        && let Some(process) = c.first_failed(doc.is_err())
+        && doc.is_ok()
+    {
+        return Err(RunError::OtherProcess { process });
+    }
     let opts = DriveOptions {
         out: out.to_path_buf(),
         resume: resume.map(Path::to_path_buf),
         interrupt,
         progress,
+        processes,
     };
-    kinds::dispatch(doc, file, &opts)
+    kinds::dispatch(doc?, file, &opts)
 }
 
-/// `thm run`.
+/// `thm run`. Built with the feature `mpi`, it starts MPI; under `mpirun -np N` (N > 1) the
+/// material points' RVEs are spread over the N processes, process 0 writes every output, and
+/// an error that only one process saw ends the whole job (`MPI_Abort`).
 pub fn run(args: &RunArgs) -> ExitCode {
+    #[cfg(feature = "mpi")]
+    let mpi = crate::mpi_rve::init();
+    #[cfg(feature = "mpi")]
+    let processes = mpi.as_ref().and_then(|(_, c)| c.clone());
+    #[cfg(not(feature = "mpi"))]
+    let processes: Option<Arc<dyn thm_coupling::multiscale::Collective>> = None;
+    let primary = processes.as_ref().is_none_or(|c| c.rank() == 0);
+    let distributed = processes.is_some();
+
     let interrupt = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&interrupt);
     if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed)) {
         eprintln!("warning: Ctrl-C will not write a checkpoint ({e})");
     }
     let out = args.out.clone().unwrap_or_else(|| default_out(&args.file));
-    match run_file(
+    let result = run_file_on(
         &args.file,
         &out,
         args.resume.as_deref(),
         &interrupt,
         Progress::Auto,
-    ) {
+        processes,
+    );
+    if !primary {
+        // Process 0 reports; another process speaks only for an error of its own (one that
+        // the others did not share), and then ends the job.
+        return match result {
+            Ok(_) => ExitCode::SUCCESS,
+            Err(RunError::OtherProcess { .. }) => ExitCode::FAILURE,
+            Err(e) => {
+                if !collective_error(&e) {
+                    eprintln!("error (process {}): {e}", rank_of_this());
+                }
+                ExitCode::FAILURE
+            }
+        };
+    }
+    let alone = distributed && matches!(&result, Err(e) if !collective_error(e));
+    let code = report(args, &out, result);
+    #[cfg(feature = "mpi")]
+    if alone {
+        // The others may be waiting in a collective for this process: end the job.
+        crate::mpi_rve::abort(1);
+    }
+    let _ = alone;
+    code
+}
+
+/// Whether every process of a distributed run returns `e` at the same point (physics and
+/// configuration errors are deterministic; failures in the RVE stage are agreed), so that
+/// process 0's report speaks for all.
+fn collective_error(e: &RunError) -> bool {
+    matches!(
+        e,
+        RunError::Physics { .. }
+            | RunError::Unstable { .. }
+            | RunError::Config { .. }
+            | RunError::NotDistributable { .. }
+            | RunError::CheckpointMismatch { .. }
+    )
+}
+
+fn rank_of_this() -> String {
+    std::env::var("OMPI_COMM_WORLD_RANK")
+        .or_else(|_| std::env::var("PMI_RANK"))
+        .unwrap_or_else(|_| "?".into())
+}
+
+/// Prints how a run ended and returns the exit code.
+fn report(args: &RunArgs, out: &Path, result: Result<Outcome, RunError>) -> ExitCode {
+    match result {
         Ok(Outcome::Finished { steps, checkpoint }) => {
             eprintln!(
                 "finished {steps} steps; results in {} (last checkpoint {})",
@@ -112,7 +193,7 @@ pub fn run(args: &RunArgs) -> ExitCode {
                     | RunError::Physics { .. }
                     | RunError::Unstable { .. }
             );
-            if stopped && let Some(ckpt) = last_complete_checkpoint(&out) {
+            if stopped && let Some(ckpt) = last_complete_checkpoint(out) {
                 eprintln!(
                     "the last complete checkpoint is {}; once the cause is fixed, continue with: thm run {} --out {} --resume {}",
                     ckpt.display(),

@@ -2,12 +2,17 @@
 //! heated 3 × 3 block of RVE material points give, on every rank, the same bits of the points
 //! (positions, velocities, stresses, temperatures) and of every point's diagnostics as one
 //! process without MPI; the ranks' RVEs match the serial run's for the points they own.
-//! Then a block of one rank fails (an RVE compressed to e^-2 in one step) and every rank
-//! returns an error naming the failing rank.
+//! After a synchronisation every rank holds every RVE of the serial run. Then a block of one
+//! rank fails (an RVE compressed to e^-2 in one step) and every rank returns an error naming
+//! the failing rank and carrying its message.
 
-use mpi::traits::*;
-use thm_cli::mpi_rve::{MpiRveError, MpiRveMaterial};
-use thm_coupling::multiscale::{DemTimeRule, MultiscaleParams, RveMaterial, RvePoint};
+use std::sync::Arc;
+
+use thm_coupling::multiscale::distributed;
+use thm_coupling::multiscale::{
+    Collective, DemTimeRule, Distribution, MultiscaleError, MultiscaleParams, RveMaterial,
+    RvePoint, ThreadGroup,
+};
 use thm_mpm::{
     GridParameters, MaterialPoints, Mpm, MpmConfig, MpmParameters, MpmState, NodeSet,
     PointProperties, Side, TemperatureCondition,
@@ -74,25 +79,28 @@ const DT: f64 = 2e-4;
 const STEPS: usize = 20;
 
 fn main() {
-    let universe = mpi::initialize().unwrap();
-    let world = universe.world();
-    let rank = world.rank();
-    let size = world.size();
+    let Some((_universe, collective)) = thm_cli::mpi_rve::init() else {
+        panic!("MPI was already initialised");
+    };
+    let collective: Arc<dyn Collective> =
+        collective.unwrap_or_else(|| Arc::new(ThreadGroup::new(1).remove(0)));
+    let (rank, size) = (collective.rank(), collective.size());
 
     let (mut mpm, mut serial, mut mat) = block();
     for _ in 0..STEPS {
         mpm.step_batch(&mut serial, &mut mat, DT).unwrap();
     }
 
-    let (mut mpm, mut st, mat) = block();
-    let mut dist = MpiRveMaterial::new(mat);
+    let (mut mpm, mut st, mut mat) = block();
+    let dist = Distribution::shared(Arc::clone(&collective));
+    mat.distribute(Arc::clone(&dist));
     for _ in 0..STEPS {
-        mpm.step_batch(&mut st, &mut dist, DT).unwrap();
+        mpm.step_batch(&mut st, &mut mat, DT).unwrap();
     }
     assert_eq!(format!("{:?}", st.points), format!("{:?}", serial.points));
     assert_eq!((st.time, st.step), (serial.time, serial.step));
-    let mine = dist.blocks()[rank as usize].clone();
-    assert_eq!(dist.blocks().len(), size as usize);
+    let mine = distributed::lock(&dist).blocks()[rank].clone();
+    assert_eq!(distributed::lock(&dist).blocks().len(), size);
     for (i, (a, b)) in st.material.iter().zip(&serial.material).enumerate() {
         let diag = |p: &RvePoint| {
             format!(
@@ -104,7 +112,8 @@ fn main() {
                     p.rve_volume,
                     p.inertial_number,
                     p.kinetic_ratio,
-                    p.substeps
+                    p.substeps,
+                    p.intact_bonds
                 )
             )
         };
@@ -113,13 +122,18 @@ fn main() {
             assert_eq!(a, b, "owned RVE {i} on rank {rank}");
         }
     }
-    let (compute, comm) = (dist.compute_seconds, dist.comm_seconds);
+    // After a synchronisation every rank holds every current RVE.
+    distributed::lock(&dist)
+        .synchronise(&mut st.material)
+        .unwrap();
+    assert_eq!(st.material, serial.material, "rank {rank} after synchronising");
+    let stats = distributed::lock(&dist).stats();
     let work: f64 = serial.material.iter().map(|p| p.friction_work).sum();
     assert!(work > 0.0, "no sliding: the test would not see the heat");
 
     // A failing block: the last point is squeezed to e^-2 of its width in one step.
-    let (_, mut st, mat) = block();
-    let mut dist = MpiRveMaterial::new(mat);
+    let (_, mut st, mut mat) = block();
+    mat.distribute(Distribution::shared(Arc::clone(&collective)));
     let n = st.material.len();
     let inputs: Vec<_> = (0..n)
         .map(|point| thm_mpm::MaterialInput {
@@ -139,23 +153,30 @@ fn main() {
         .collect();
     let mut out = vec![thm_mpm::MaterialResponse::default(); n];
     use thm_mpm::BatchConstitutive;
-    let e = dist
+    let e = mat
         .respond_batch(&mut st.material, &inputs, &mut out)
         .unwrap_err();
     let last = size - 1;
-    match (&e, rank == last) {
-        (MpiRveError::Local { rank: r, .. }, true) => assert_eq!(*r, last),
-        (MpiRveError::OtherRank { rank: r, step }, false) => {
-            assert_eq!((*r, *step), (last, 0));
+    match &e {
+        MultiscaleError::Distributed {
+            process,
+            exchange,
+            message,
+        } => {
+            assert_eq!((*process, *exchange), (last, 0), "rank {rank}");
+            assert!(
+                message.contains(&format!("RVE of material point {}", n - 1)),
+                "{message}"
+            );
         }
         _ => panic!("rank {rank}: unexpected {e}"),
     }
-    let msg = e.to_string();
-    assert!(msg.contains(&format!("rank {last}")), "{msg}");
     println!(
         "rank {rank}/{size}: {STEPS} steps bit-identical to the serial run (block {mine:?}); \
-         per step: RVE block {:.3} ms, communication {:.3} ms; failure: {msg}",
-        1e3 * compute / STEPS as f64,
-        1e3 * comm / STEPS as f64,
+         per step: RVE block {:.3} ms, communication {:.3} ms; synchronising {:.3} ms; \
+         failure: {e}",
+        1e3 * stats.compute_seconds / STEPS as f64,
+        1e3 * stats.comm_seconds / STEPS as f64,
+        1e3 * stats.sync_seconds,
     );
 }

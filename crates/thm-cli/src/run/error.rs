@@ -158,6 +158,23 @@ pub enum RunError {
         /// What is wrong and what is allowed.
         detail: String,
     },
+    /// Another process of a distributed run (`mpirun -np N thm run`) could not open the run;
+    /// that process prints why.
+    #[error("process {process} of the distributed run could not open it (its message says why)")]
+    OtherProcess {
+        /// The lowest failing process.
+        process: usize,
+    },
+    /// The kind has no RVE stage to spread over processes.
+    #[error(
+        "kind `{kind}` has no RVE stage to spread over {processes} processes; run it without mpirun (or with -np 1)"
+    )]
+    NotDistributable {
+        /// The kind.
+        kind: &'static str,
+        /// The processes the run was started on.
+        processes: usize,
+    },
     /// A step was asked of a run that has reached its end time.
     #[error("the run has reached its end time after {steps} steps; nothing left to step")]
     Ended {

@@ -3,11 +3,13 @@
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
+use thm_coupling::multiscale::{Collective, Distribution, SharedDistribution};
 use thm_io::{Column, CsvHistory, IoError, UnstructuredGrid, VtuSeries};
 
 use super::config::{ScenarioDocument, TimeControl, from_toml};
@@ -84,6 +86,24 @@ pub trait Scenario: Sized {
         Vec::new()
     }
 
+    /// Spreads the kind's RVE stage over the processes of `distribution` (`mpirun -np N thm
+    /// run`; see `thm_coupling::multiscale::distributed`). Default: the kind has none, refused.
+    fn distribute(&mut self, distribution: &SharedDistribution) -> Result<(), RunError> {
+        Err(RunError::NotDistributable {
+            kind: Self::KIND,
+            processes: thm_coupling::multiscale::distributed::lock(distribution)
+                .collective()
+                .size(),
+        })
+    }
+
+    /// Brings every process's RVEs up to date in a distributed run; the driver calls it, on
+    /// every process, before anything reads the RVEs' disks (a frame, a checkpoint, the
+    /// summary). Default: nothing to bring.
+    fn synchronise(&mut self, _state: &mut Self::State) -> Result<(), RunError> {
+        Ok(())
+    }
+
     /// Replaces the values of the writable array `name` between steps (a load, a
     /// temperature). What is written is part of the state, so a checkpoint keeps it. Errors
     /// name the array and the allowed range. Default: no writable arrays.
@@ -114,8 +134,7 @@ struct RunCheckpoint<S> {
 pub enum Progress {
     /// A progress bar on a terminal, periodic lines otherwise.
     Auto,
-    /// Nothing (tests).
-    #[cfg_attr(not(test), allow(dead_code))]
+    /// Nothing (tests, and the processes of a distributed run other than 0).
     Quiet,
 }
 
@@ -130,6 +149,9 @@ pub struct DriveOptions<'a> {
     pub interrupt: &'a AtomicBool,
     /// Progress display.
     pub progress: Progress,
+    /// The processes of a distributed run (`mpirun -np N thm run`, feature `mpi`); `None`
+    /// runs on this process alone.
+    pub processes: Option<Arc<dyn Collective>>,
 }
 
 /// How a run ended.
@@ -384,12 +406,21 @@ pub struct Run<S: Scenario> {
     scenario: S,
     state: S::State,
     columns: Vec<Column>,
-    history: CsvHistory,
+    /// `None` on the processes of a distributed run other than 0, which write nothing.
+    history: Option<CsvHistory>,
     series: Vec<VtuSeries>,
+    parallel: Option<Parallel>,
+    synced_at: Option<u64>,
     encoding: thm_io::Encoding,
     row: Vec<f64>,
     wall: Instant,
     last_checkpoint: Option<PathBuf>,
+}
+
+/// A distributed run's processes and its RVE stage.
+struct Parallel {
+    collective: Arc<dyn Collective>,
+    distribution: SharedDistribution,
 }
 
 impl<S: Scenario> std::fmt::Debug for Run<S> {
@@ -414,13 +445,58 @@ impl<S: Scenario> Run<S> {
         out: &Path,
         resume: Option<&Path>,
     ) -> Result<Self, RunError> {
+        Self::open_on(doc, file, out, resume, None)
+    }
+
+    /// [`Run::open`] on the processes of `processes` (every process calls it): each builds
+    /// the scenario and loads the checkpoint, the kind spreads its RVE stage over them
+    /// ([`Scenario::distribute`]), and only process 0 writes. If any process fails to open,
+    /// every process returns an error (the failing one its cause).
+    pub fn open_on(
+        doc: ScenarioDocument,
+        file: &Path,
+        out: &Path,
+        resume: Option<&Path>,
+        processes: Option<Arc<dyn Collective>>,
+    ) -> Result<Self, RunError> {
+        let opened = Self::open_here(doc, file, out, resume, processes.clone());
+        if let Some(c) = &processes
+            && let Some(process) = c.first_failed(opened.is_err())
+            && opened.is_ok()
+        {
+            return Err(RunError::OtherProcess { process });
+        }
+        opened
+    }
+
+    fn open_here(
+        doc: ScenarioDocument,
+        file: &Path,
+        out: &Path,
+        resume: Option<&Path>,
+        processes: Option<Arc<dyn Collective>>,
+    ) -> Result<Self, RunError> {
         let config = |error: ConfigError| RunError::Config {
             path: file.to_path_buf(),
             error,
         };
         let (params, tc, mut scenario, mut state) = build::<S>(&doc).map_err(config)?;
         let (resolved, params_text) = resolved_toml(&doc, &params)?;
-        prepare_output(out, resume.is_some())?;
+        let parallel = match processes {
+            Some(collective) => {
+                let distribution = Distribution::shared(Arc::clone(&collective));
+                scenario.distribute(&distribution)?;
+                Some(Parallel {
+                    collective,
+                    distribution,
+                })
+            }
+            None => None,
+        };
+        let primary = parallel.as_ref().is_none_or(|p| p.collective.rank() == 0);
+        if primary {
+            prepare_output(out, resume.is_some())?;
+        }
 
         // Resume: the state and step of the checkpoint, checked against this scenario.
         let mut start = 0u64;
@@ -444,17 +520,23 @@ impl<S: Scenario> Run<S> {
             state = saved.state;
             scenario.restore(&state)?;
         }
-        thm_io::fsutil::write_atomically(&out.join(SCENARIO_FILE), |w| {
-            std::io::Write::write_all(w, resolved.as_bytes())
-        })?;
+        if primary {
+            thm_io::fsutil::write_atomically(&out.join(SCENARIO_FILE), |w| {
+                std::io::Write::write_all(w, resolved.as_bytes())
+            })?;
+        }
 
         let dt = tc.dt;
         let mut columns = vec![Column::new("time", "s")];
         columns.extend(scenario.monitor_columns());
-        let history = if resume.is_some() {
-            CsvHistory::resume(&out.join(HISTORY_FILE), &columns, start as f64 * dt)?
-        } else {
-            CsvHistory::create(&out.join(HISTORY_FILE), &columns)?
+        let history = match (primary, resume.is_some()) {
+            (false, _) => None,
+            (true, true) => Some(CsvHistory::resume(
+                &out.join(HISTORY_FILE),
+                &columns,
+                start as f64 * dt,
+            )?),
+            (true, false) => Some(CsvHistory::create(&out.join(HISTORY_FILE), &columns)?),
         };
         let encoding: thm_io::Encoding = doc.common.output.encoding.into();
         let row = Vec::with_capacity(columns.len());
@@ -472,6 +554,8 @@ impl<S: Scenario> Run<S> {
             columns,
             history,
             series: Vec::new(),
+            parallel,
+            synced_at: None,
             encoding,
             row,
             wall: Instant::now(),
@@ -479,7 +563,7 @@ impl<S: Scenario> Run<S> {
         };
         if start == 0 {
             run.observe()?;
-            run.history.push(&run.row)?;
+            run.push_row()?;
             run.write_frame()?;
         }
         run.wall = Instant::now();
@@ -535,7 +619,34 @@ impl<S: Scenario> Run<S> {
         Ok(())
     }
 
+    /// Whether this process writes the outputs (always, unless it is a distributed run's
+    /// process other than 0).
+    pub fn is_primary(&self) -> bool {
+        self.history.is_some()
+    }
+
+    fn push_row(&mut self) -> Result<(), RunError> {
+        if let Some(h) = &mut self.history {
+            h.push(&self.row)?;
+        }
+        Ok(())
+    }
+
+    /// In a distributed run, brings every process's RVEs up to date (once per step: a frame
+    /// and a checkpoint of the same step share it).
+    fn synchronise(&mut self) -> Result<(), RunError> {
+        if self.parallel.is_some() && self.synced_at != Some(self.step) {
+            self.scenario.synchronise(&mut self.state)?;
+            self.synced_at = Some(self.step);
+        }
+        Ok(())
+    }
+
     fn write_frame(&mut self) -> Result<(), RunError> {
+        self.synchronise()?;
+        if !self.is_primary() {
+            return Ok(());
+        }
         let (step, t) = (self.step, self.time_of(self.step));
         let (out, encoding, resume_time) = (&self.out, self.encoding, self.time_of(self.start));
         let resuming = self.start > 0;
@@ -562,8 +673,13 @@ impl<S: Scenario> Run<S> {
     }
 
     fn save(&mut self) -> Result<PathBuf, RunError> {
-        self.history.flush()?;
+        self.synchronise()?;
         let path = checkpoint_path(&self.out, self.step);
+        let Some(history) = &mut self.history else {
+            self.last_checkpoint = Some(path.clone());
+            return Ok(path);
+        };
+        history.flush()?;
         let ckpt = RunCheckpoint {
             params: self.params_text.clone(),
             dt: self.dt,
@@ -598,7 +714,7 @@ impl<S: Scenario> Run<S> {
         // never checkpointed.
         if step.is_multiple_of(history_every) || last {
             self.observe()?;
-            self.history.push(&self.row)?;
+            self.push_row()?;
         } else if checkpoint_due || interrupted {
             self.observe()?;
         }
@@ -655,7 +771,9 @@ impl<S: Scenario> Run<S> {
                 checkpoint,
             });
         }
-        self.history.flush()?;
+        if let Some(h) = &mut self.history {
+            h.flush()?;
+        }
         let checkpoint = match self.last_checkpoint.clone() {
             Some(c) => c,
             None => self.save()?,
@@ -668,6 +786,16 @@ impl<S: Scenario> Run<S> {
     }
 
     fn write_summary(&mut self, interrupted: Option<&Path>) -> Result<(), RunError> {
+        self.synchronise()?;
+        if !self.is_primary() {
+            return Ok(());
+        }
+        let processes = self.parallel.as_ref().map(|p| {
+            (
+                p.collective.size(),
+                thm_coupling::multiscale::distributed::lock(&p.distribution).stats(),
+            )
+        });
         let info = RunInfo {
             common: &self.common,
             file: &self.file,
@@ -676,6 +804,7 @@ impl<S: Scenario> Run<S> {
             dt: self.dt,
             wall_seconds: self.wall.elapsed().as_secs_f64(),
             interrupted,
+            processes,
         };
         write_summary(&self.out, &info, &self.scenario, &self.state)
     }
@@ -687,10 +816,25 @@ pub fn drive<S: Scenario>(
     file: &Path,
     opts: &DriveOptions<'_>,
 ) -> Result<Outcome, RunError> {
-    let mut run = Run::<S>::open(doc, file, &opts.out, opts.resume.as_deref())?;
-    let mut progress = ProgressDisplay::new(opts.progress, run.start, run.n, run.dt);
+    let mut run = Run::<S>::open_on(
+        doc,
+        file,
+        &opts.out,
+        opts.resume.as_deref(),
+        opts.processes.clone(),
+    )?;
+    let mode = if run.is_primary() {
+        opts.progress
+    } else {
+        Progress::Quiet
+    };
+    let mut progress = ProgressDisplay::new(mode, run.start, run.n, run.dt);
     while run.steps_done() < run.n_steps() {
-        let interrupted = opts.interrupt.load(Ordering::Relaxed);
+        let mut interrupted = opts.interrupt.load(Ordering::Relaxed);
+        // Every process stops at the same step (a signal may reach only some of them).
+        if let Some(c) = &opts.processes {
+            interrupted = c.any(interrupted);
+        }
         run.advance(interrupted)?;
         progress.update(run.steps_done());
         if interrupted && run.steps_done() < run.n_steps() {

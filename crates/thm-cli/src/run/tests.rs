@@ -421,6 +421,7 @@ mod unstable {
             resume: None,
             interrupt: &AtomicBool::new(false),
             progress: Progress::Quiet,
+            processes: None,
         };
         let err = drive::<Exploding>(doc, Path::new("x.toml"), &opts).unwrap_err();
         // x = 1e100, 1e200, inf: step 3 is not a history step, but it is checked before the

@@ -72,6 +72,7 @@ use thm_mpm::{
 use thm_rve::{ConsolidationParams, PackingParams, RveParams, RveState, consolidate, measure};
 
 use super::error::MultiscaleError;
+use super::distributed::{self, SharedDistribution};
 use super::material::{RveMaterial, RvePoint};
 use super::params::{DemTimeRule, MultiscaleParams, QuasiStaticLimits};
 
@@ -666,6 +667,19 @@ impl BiaxialModel {
         }
         self.mpm.set_surface_loads(loads)?;
         Ok(())
+    }
+
+    /// Spreads the RVE stage over the processes of `d` (see [`super::distributed`]).
+    pub fn distribute(&mut self, d: &SharedDistribution) {
+        self.material.distribute(std::sync::Arc::clone(d));
+    }
+
+    /// Brings every process's RVEs up to date (a no-op without a distribution).
+    pub fn synchronise(&mut self) -> Result<(), MultiscaleError> {
+        match self.material.distribution() {
+            Some(d) => distributed::lock(d).synchronise(&mut self.state.material),
+            None => Ok(()),
+        }
     }
 
     /// Restores a saved state (points with RVEs) and running sums.

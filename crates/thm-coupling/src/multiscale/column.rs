@@ -69,7 +69,10 @@ use thm_mpm::{
 };
 use thm_rve::{ConsolidationParams, PackingParams, RveParams, RveState, consolidate, measure};
 
+use std::sync::Arc;
+
 use super::error::MultiscaleError;
+use super::distributed::{self, SharedDistribution};
 use super::material::{RveMaterial, RvePoint};
 use super::params::{DemTimeRule, MultiscaleParams};
 
@@ -710,7 +713,7 @@ impl ColumnModel {
     pub fn intact_bonds_of(&self, state: &MpmState<RvePoint>) -> [u64; 2] {
         let mut n = [0u64; 2];
         for (r, heated) in state.material.iter().zip(&self.heated_half) {
-            n[usize::from(!*heated)] += r.rve.contacts.intact_bond_count() as u64;
+            n[usize::from(!*heated)] += u64::from(r.intact_bonds);
         }
         n
     }
@@ -748,17 +751,37 @@ impl ColumnModel {
             .sum()
     }
 
-    /// The release: bonds installed in every RVE (β_a > 0), `E_p0`, the corner position.
-    fn release(&mut self) {
+    /// Spreads the RVE stage over the processes of `d` (both materials share it; see
+    /// [`super::distributed`]).
+    pub fn distribute(&mut self, d: &SharedDistribution) {
+        self.settle_material.distribute(Arc::clone(d));
+        self.collapse_material.distribute(Arc::clone(d));
+    }
+
+    /// Brings every process's RVEs up to date (a no-op without a distribution).
+    pub fn synchronise(&mut self) -> Result<(), MultiscaleError> {
+        match self.settle_material.distribution() {
+            Some(d) => distributed::lock(d).synchronise(&mut self.state.material),
+            None => Ok(()),
+        }
+    }
+
+    /// The release: bonds installed in every RVE (β_a > 0), `E_p0`, the corner position. In a
+    /// distributed run every process first takes the current RVEs, so that the bonds are
+    /// installed on the same disks everywhere.
+    fn release(&mut self) -> Result<(), MultiscaleError> {
         if self.test.bond_strength > 0.0 {
+            self.synchronise()?;
             for r in &mut self.state.material {
                 r.rve.install_bonds();
+                r.count_bonds();
             }
         }
         self.totals.released = true;
         self.totals.bonds_installed = self.intact_bonds();
         self.totals.potential_energy_at_release = self.energies().0;
         self.totals.corner_at_release = self.state.points.position[self.corner];
+        Ok(())
     }
 
     /// Reduces every RVE cell whose basis has become skewed (`thm_rve::RveState::reduce_cell`:
@@ -771,7 +794,7 @@ impl ColumnModel {
     /// sums.
     pub fn step(&mut self) -> Result<(), MultiscaleError> {
         if !self.totals.released && self.state.step >= self.test.settle_steps() {
-            self.release();
+            self.release()?;
         }
         self.reduce_cells()?;
         let dt = self.test.time_step;

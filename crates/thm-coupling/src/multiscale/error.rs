@@ -68,6 +68,24 @@ pub enum MultiscaleError {
         /// The value the parameters imply.
         expected: f64,
     },
+    /// A process of a distributed run failed in its block of RVEs (every process returns
+    /// this, with the failing process's message; see [`super::distributed`]).
+    #[error("process {process} failed in exchange {exchange}: {message}")]
+    Distributed {
+        /// The lowest failing process.
+        process: usize,
+        /// The exchange (MPM step of this material, counted from the start of this run).
+        exchange: u64,
+        /// That process's error, in words.
+        message: String,
+    },
+    /// The processes of a distributed run disagree on the RVEs they hold (a synchronisation
+    /// could not be completed).
+    #[error("distributed RVE stage: {detail}")]
+    DistributedState {
+        /// What does not fit.
+        detail: String,
+    },
     /// An error of the MPM stepper.
     #[error("MPM: {0}")]
     Mpm(#[from] MpmError),

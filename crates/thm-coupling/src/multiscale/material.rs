@@ -8,6 +8,7 @@ use thm_mpm::points::Sym2;
 use thm_mpm::{BatchConstitutive, MaterialInput, MaterialPoints, MaterialResponse, MpmState};
 use thm_rve::{RveBatch, RveLoad, RveResponse, RveState, measure};
 
+use super::distributed::{self, SharedDistribution};
 use super::error::MultiscaleError;
 use super::params::{MultiscaleConfig, MultiscaleParams};
 use super::stages;
@@ -32,6 +33,16 @@ pub struct RvePoint {
     pub kinetic_ratio: f64,
     /// DEM steps of the last MPM step.
     pub substeps: u32,
+    /// Intact bonds of the RVE after the last step (kept here so that a process that does
+    /// not own the RVE in a distributed run still reads it; see [`super::distributed`]).
+    pub intact_bonds: u32,
+}
+
+impl RvePoint {
+    /// Recounts [`RvePoint::intact_bonds`] from the RVE (after bonds are installed).
+    pub fn count_bonds(&mut self) {
+        self.intact_bonds = u32::try_from(self.rve.contacts.intact_bond_count()).unwrap_or(u32::MAX);
+    }
 }
 
 impl AsMut<RveState> for RvePoint {
@@ -46,7 +57,7 @@ impl AsRef<RveState> for RvePoint {
     }
 }
 
-/// What one material point's exchange produces, a fixed-size record (15 numbers): all a
+/// What one material point's exchange produces, a fixed-size record (16 numbers): all a
 /// process that did not step the point's RVE needs to continue the MPM step bit for bit
 /// (the response, and the diagnostics the time-step limit and the checks read).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -65,6 +76,8 @@ pub struct PointOutcome {
     pub kinetic_ratio: f64,
     /// See [`RvePoint::substeps`].
     pub substeps: u32,
+    /// See [`RvePoint::intact_bonds`].
+    pub intact_bonds: u32,
 }
 
 impl PointOutcome {
@@ -76,6 +89,7 @@ impl PointOutcome {
         point.inertial_number = self.inertial_number;
         point.kinetic_ratio = self.kinetic_ratio;
         point.substeps = self.substeps;
+        point.intact_bonds = self.intact_bonds;
         point.steps += 1;
         self.response
     }
@@ -153,6 +167,7 @@ pub struct RveMaterial {
     rve_responses: Vec<RveResponse>,
     totals: Vec<f64>,
     outcomes: Vec<PointOutcome>,
+    distribution: Option<SharedDistribution>,
 }
 
 /// Relative tolerance of the packing check (disk mass against `ρ π R₀² z_p`).
@@ -193,7 +208,7 @@ impl RveMaterial {
         let mut rve = packing;
         stages::scale_density(&mut rve, params.dem_time.density_scaling);
         let [dx, dy] = stages::axial_moduli(&rve, p);
-        let template = RvePoint {
+        let mut template = RvePoint {
             rve_volume: rve.volume(p.thickness),
             rve,
             steps: 0,
@@ -202,7 +217,9 @@ impl RveMaterial {
             inertial_number: 0.0,
             kinetic_ratio: 0.0,
             substeps: 0,
+            intact_bonds: 0,
         };
+        template.count_bonds();
         Ok(Self {
             batch: RveBatch::new(*config.rve(), 0),
             config,
@@ -211,6 +228,7 @@ impl RveMaterial {
             rve_responses: Vec::new(),
             totals: Vec::new(),
             outcomes: Vec::new(),
+            distribution: None,
         })
     }
 
@@ -274,6 +292,9 @@ impl RveMaterial {
             }
             .into());
         }
+        if let Some(d) = self.distribution.clone() {
+            return distributed::lock(&d).exchange(self, states, inputs, responses);
+        }
         let mut outcomes = std::mem::take(&mut self.outcomes);
         outcomes.resize(n, PointOutcome::default());
         let stepped = self.step_block(states, inputs, 0, &mut outcomes);
@@ -283,6 +304,17 @@ impl RveMaterial {
         self.outcomes = outcomes;
         stepped?;
         self.check_quasi_static(states)
+    }
+
+    /// Spreads the RVE stage over the processes of `distribution` (see
+    /// [`super::distributed`]); every exchange from now on steps only this process's block.
+    pub fn distribute(&mut self, distribution: SharedDistribution) {
+        self.distribution = Some(distribution);
+    }
+
+    /// The distribution, if the RVE stage is spread over processes.
+    pub fn distribution(&self) -> Option<&SharedDistribution> {
+        self.distribution.as_ref()
     }
 
     /// Lines 12–19 of B-Algorithm 1 for the contiguous block of points `states` (the points
@@ -367,6 +399,8 @@ impl RveMaterial {
                     inertial_number: i,
                     kinetic_ratio: k,
                     substeps: load.substeps,
+                    intact_bonds: u32::try_from(point.rve.contacts.intact_bond_count())
+                        .unwrap_or(u32::MAX),
                 };
             });
         Ok(())

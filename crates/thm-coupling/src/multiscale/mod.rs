@@ -149,6 +149,7 @@ pub mod biaxial;
 pub mod biaxial_verification;
 pub mod column;
 pub mod column_verification;
+pub mod distributed;
 pub mod error;
 pub mod material;
 pub mod params;
@@ -161,6 +162,7 @@ pub mod verification;
 
 pub use biaxial::{BiaxialModel, BiaxialTest, Compaction};
 pub use column::{ColumnModel, ColumnTest};
+pub use distributed::{Collective, Distribution, SharedDistribution, ThreadGroup};
 pub use error::MultiscaleError;
 pub use material::{PointOutcome, RveMaterial, RvePoint, partition, rve_cost};
 pub use params::{DemTimeRule, MultiscaleConfig, MultiscaleParams, QuasiStaticLimits};

@@ -47,6 +47,7 @@ use thm_rve::{RveParams, RveState};
 
 use super::column::{ColumnPacking, consolidated_packing, reduce_cells};
 use super::error::MultiscaleError;
+use super::distributed::{self, SharedDistribution};
 use super::material::{RveMaterial, RvePoint};
 use super::params::{DemTimeRule, MultiscaleParams};
 
@@ -538,6 +539,19 @@ impl SiloModel {
     /// The tracked points A and B.
     pub fn tracked(&self) -> [usize; 2] {
         self.tracked
+    }
+
+    /// Spreads the RVE stage over the processes of `d` (see [`super::distributed`]).
+    pub fn distribute(&mut self, d: &SharedDistribution) {
+        self.material.distribute(std::sync::Arc::clone(d));
+    }
+
+    /// Brings every process's RVEs up to date (a no-op without a distribution).
+    pub fn synchronise(&mut self) -> Result<(), MultiscaleError> {
+        match self.material.distribution() {
+            Some(d) => distributed::lock(d).synchronise(&mut self.state.material),
+            None => Ok(()),
+        }
     }
 
     /// Restores a saved state and running sums.

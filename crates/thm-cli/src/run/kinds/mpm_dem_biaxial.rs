@@ -14,9 +14,9 @@
 //! (grid, plates, consolidated template) is rebuilt from the parameters on resume.
 
 use serde::{Deserialize, Serialize};
+use thm_coupling::multiscale::distributed::SharedDistribution;
 use thm_coupling::multiscale::biaxial::{BiaxialModel, BiaxialTest, BiaxialTotals, Compaction};
 use thm_coupling::multiscale::{RvePoint, biaxial::BiaxialRecord};
-use thm_dem::BondState;
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 use thm_mpm::{BatchConstitutive, MpmState};
 
@@ -137,22 +137,31 @@ impl MpmDemBiaxial {
 fn intact_bonds(mpm: &MpmState<RvePoint>) -> usize {
     mpm.material
         .iter()
-        .map(|p| {
-            p.rve
-                .contacts
-                .history
-                .iter()
-                .filter(|h| h.bond == BondState::Intact)
-                .count()
-        })
+        .map(|p| p.intact_bonds as usize)
         .sum()
 }
 
 impl Scenario for MpmDemBiaxial {
     const KIND: &'static str = "mpm_dem_biaxial";
-    const STATE_VERSION: u32 = 1;
+    // 2: RvePoint carries its intact bond count.
+    const STATE_VERSION: u32 = 2;
     type Params = Params;
     type State = State;
+
+    fn distribute(&mut self, distribution: &SharedDistribution) -> Result<(), RunError> {
+        self.model.distribute(distribution);
+        Ok(())
+    }
+
+    fn synchronise(&mut self, state: &mut State) -> Result<(), RunError> {
+        let (step, time) = (state.mpm.step, state.mpm.time);
+        self.with_state(state, |m| m.synchronise())
+            .map_err(|e| RunError::Physics {
+                step: step,
+                time: time,
+                message: e.to_string(),
+            })
+    }
 
     fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::run::scenario::StateArray<'s>> {
         crate::run::arrays::mpm_rve_arrays(&state.mpm.points, &state.mpm.material)

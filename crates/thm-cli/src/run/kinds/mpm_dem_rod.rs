@@ -11,6 +11,7 @@
 //! from the parameters on resume; the checkpoint holds the `MpmState` with every RVE.
 
 use serde::{Deserialize, Serialize};
+use thm_coupling::multiscale::distributed::SharedDistribution;
 use thm_coupling::multiscale::rod::{rod_displacement, rod_stress, rod_temperature};
 use thm_coupling::multiscale::{GranularRod, RodModel, RveMaterial, RvePoint};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
@@ -78,9 +79,28 @@ impl MpmDemRod {
 
 impl Scenario for MpmDemRod {
     const KIND: &'static str = "mpm_dem_rod";
-    const STATE_VERSION: u32 = 1;
+    // 2: RvePoint carries its intact bond count.
+    const STATE_VERSION: u32 = 2;
     type Params = Params;
     type State = MpmState<RvePoint>;
+
+    fn distribute(&mut self, distribution: &SharedDistribution) -> Result<(), RunError> {
+        self.material.distribute(std::sync::Arc::clone(distribution));
+        Ok(())
+    }
+
+    fn synchronise(&mut self, state: &mut Self::State) -> Result<(), RunError> {
+        if let Some(d) = self.material.distribution() {
+            thm_coupling::multiscale::distributed::lock(d)
+                .synchronise(&mut state.material)
+                .map_err(|e| RunError::Physics {
+                step: state.step,
+                time: state.time,
+                message: e.to_string(),
+            })?;
+        }
+        Ok(())
+    }
 
     fn arrays<'s>(&'s self, state: &'s Self::State) -> Vec<crate::run::scenario::StateArray<'s>> {
         crate::run::arrays::mpm_rve_arrays(&state.points, &state.material)

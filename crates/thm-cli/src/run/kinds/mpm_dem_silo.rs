@@ -17,6 +17,7 @@
 //! sums and the discharge samples.
 
 use serde::{Deserialize, Serialize};
+use thm_coupling::multiscale::distributed::SharedDistribution;
 use thm_coupling::multiscale::RvePoint;
 use thm_coupling::multiscale::silo::{SiloModel, SiloRecord, SiloTest, SiloTotals};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
@@ -112,9 +113,25 @@ impl MpmDemSilo {
 
 impl Scenario for MpmDemSilo {
     const KIND: &'static str = "mpm_dem_silo";
-    const STATE_VERSION: u32 = 1;
+    // 2: RvePoint carries its intact bond count.
+    const STATE_VERSION: u32 = 2;
     type Params = Params;
     type State = State;
+
+    fn distribute(&mut self, distribution: &SharedDistribution) -> Result<(), RunError> {
+        self.model.distribute(distribution);
+        Ok(())
+    }
+
+    fn synchronise(&mut self, state: &mut State) -> Result<(), RunError> {
+        let (step, time) = (state.mpm.step, state.mpm.time);
+        self.with_state(state, |m| m.synchronise())
+            .map_err(|e| RunError::Physics {
+                step: step,
+                time: time,
+                message: e.to_string(),
+            })
+    }
 
     fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::run::scenario::StateArray<'s>> {
         crate::run::arrays::mpm_rve_arrays(&state.mpm.points, &state.mpm.material)

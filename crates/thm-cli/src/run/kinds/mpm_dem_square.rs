@@ -16,6 +16,7 @@
 //! on resume; the checkpoint holds both `MpmState`s, every RVE included.
 
 use serde::{Deserialize, Serialize};
+use thm_coupling::multiscale::distributed::SharedDistribution;
 use thm_coupling::multiscale::square::{
     GranularSquare, SquareModel, centre_value, square_temperature,
 };
@@ -103,9 +104,28 @@ impl MpmDemSquare {
 
 impl Scenario for MpmDemSquare {
     const KIND: &'static str = "mpm_dem_square";
-    const STATE_VERSION: u32 = 1;
+    // 2: RvePoint carries its intact bond count.
+    const STATE_VERSION: u32 = 2;
     type Params = Params;
     type State = SquareState;
+
+    fn distribute(&mut self, distribution: &SharedDistribution) -> Result<(), RunError> {
+        self.material.distribute(std::sync::Arc::clone(distribution));
+        Ok(())
+    }
+
+    fn synchronise(&mut self, state: &mut Self::State) -> Result<(), RunError> {
+        if let Some(d) = self.material.distribution() {
+            thm_coupling::multiscale::distributed::lock(d)
+                .synchronise(&mut state.multiscale.material)
+                .map_err(|e| RunError::Physics {
+                step: state.multiscale.step,
+                time: state.multiscale.time,
+                message: e.to_string(),
+            })?;
+        }
+        Ok(())
+    }
 
     fn arrays<'s>(&'s self, state: &'s SquareState) -> Vec<crate::run::scenario::StateArray<'s>> {
         let mut arrays =
