@@ -32,6 +32,7 @@ const EXCLUSIVE_EXTERNAL: &[(&str, &str)] = &[
     ("spade", "thm-vpn-mesh"),
     ("pyo3", "thm-py"),
     ("numpy", "thm-py"),
+    ("mpi", "thm-cli"),
 ];
 
 fn read(path: &Path) -> String {

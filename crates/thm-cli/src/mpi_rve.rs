@@ -36,11 +36,6 @@ pub fn init() -> Option<(Universe, Option<Arc<dyn Collective>>)> {
     Some((universe, collective))
 }
 
-/// Ends every process of the job (`MPI_Abort`), for an error that only this process saw.
-pub fn abort(code: i32) -> ! {
-    SimpleCommunicator::world().abort(code)
-}
-
 fn to_i32(n: usize) -> i32 {
     i32::try_from(n).unwrap_or(i32::MAX)
 }

@@ -91,8 +91,8 @@ pub fn run_file_on(
 }
 
 /// `thm run`. Built with the feature `mpi`, it starts MPI; under `mpirun -np N` (N > 1) the
-/// material points' RVEs are spread over the N processes, process 0 writes every output, and
-/// an error that only one process saw ends the whole job (`MPI_Abort`).
+/// material points' RVEs are spread over the N processes, process 0 writes every output and
+/// reports how the run ended.
 pub fn run(args: &RunArgs) -> ExitCode {
     #[cfg(feature = "mpi")]
     let mpi = crate::mpi_rve::init();
@@ -101,7 +101,6 @@ pub fn run(args: &RunArgs) -> ExitCode {
     #[cfg(not(feature = "mpi"))]
     let processes: Option<Arc<dyn thm_coupling::multiscale::Collective>> = None;
     let primary = processes.as_ref().is_none_or(|c| c.rank() == 0);
-    let distributed = processes.is_some();
 
     let interrupt = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&interrupt);
@@ -118,48 +117,15 @@ pub fn run(args: &RunArgs) -> ExitCode {
         processes,
     );
     if !primary {
-        // Process 0 reports; another process speaks only for an error of its own (one that
-        // the others did not share), and then ends the job.
-        return match result {
-            Ok(_) => ExitCode::SUCCESS,
-            Err(RunError::OtherProcess { .. }) => ExitCode::FAILURE,
-            Err(e) => {
-                if !collective_error(&e) {
-                    eprintln!("error (process {}): {e}", rank_of_this());
-                }
-                ExitCode::FAILURE
-            }
+        // Process 0 reports for all: every error of a distributed run is agreed between the
+        // processes at the step it happens (see `scenario::drive`).
+        return if result.is_ok() {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::FAILURE
         };
     }
-    let alone = distributed && matches!(&result, Err(e) if !collective_error(e));
-    let code = report(args, &out, result);
-    #[cfg(feature = "mpi")]
-    if alone {
-        // The others may be waiting in a collective for this process: end the job.
-        crate::mpi_rve::abort(1);
-    }
-    let _ = alone;
-    code
-}
-
-/// Whether every process of a distributed run returns `e` at the same point (physics and
-/// configuration errors are deterministic; failures in the RVE stage are agreed), so that
-/// process 0's report speaks for all.
-fn collective_error(e: &RunError) -> bool {
-    matches!(
-        e,
-        RunError::Physics { .. }
-            | RunError::Unstable { .. }
-            | RunError::Config { .. }
-            | RunError::NotDistributable { .. }
-            | RunError::CheckpointMismatch { .. }
-    )
-}
-
-fn rank_of_this() -> String {
-    std::env::var("OMPI_COMM_WORLD_RANK")
-        .or_else(|_| std::env::var("PMI_RANK"))
-        .unwrap_or_else(|_| "?".into())
+    report(args, &out, result)
 }
 
 /// Prints how a run ended and returns the exit code.

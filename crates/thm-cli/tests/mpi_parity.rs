@@ -126,7 +126,10 @@ fn main() {
     distributed::lock(&dist)
         .synchronise(&mut st.material)
         .unwrap();
-    assert_eq!(st.material, serial.material, "rank {rank} after synchronising");
+    assert_eq!(
+        st.material, serial.material,
+        "rank {rank} after synchronising"
+    );
     let stats = distributed::lock(&dist).stats();
     let work: f64 = serial.material.iter().map(|p| p.friction_work).sum();
     assert!(work > 0.0, "no sliding: the test would not see the heat");

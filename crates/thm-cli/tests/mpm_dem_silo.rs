@@ -202,3 +202,93 @@ fn bad_silo_values_name_their_key() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Every file under `dir` but the summary (it records wall time), relative path → bytes.
+fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    fn walk(root: &Path, dir: &Path, out: &mut Vec<(PathBuf, Vec<u8>)>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(root, &p, out);
+            } else if p.file_name().is_some_and(|n| n != "summary.md") {
+                out.push((
+                    p.strip_prefix(root).unwrap().to_path_buf(),
+                    std::fs::read(&p).unwrap(),
+                ));
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(dir, dir, &mut out);
+    out.sort();
+    out
+}
+
+/// `thm run` on `size` processes that are threads of this test
+/// (`thm_coupling::multiscale::ThreadGroup`, the same driver code as under `mpirun`).
+fn run_on_threads(size: usize, file: &Path, out: &Path, resume: Option<&Path>) {
+    use std::sync::Arc;
+    use std::sync::atomic::AtomicBool;
+    use thm_coupling::multiscale::{Collective, ThreadGroup};
+    let handles: Vec<_> = ThreadGroup::new(size)
+        .into_iter()
+        .map(|h| {
+            let (file, out) = (file.to_path_buf(), out.to_path_buf());
+            let resume = resume.map(Path::to_path_buf);
+            std::thread::spawn(move || {
+                let c: Arc<dyn Collective> = Arc::new(h);
+                thm_cli::run::run_file_on(
+                    &file,
+                    &out,
+                    resume.as_deref(),
+                    &AtomicBool::new(false),
+                    thm_cli::run::scenario::Progress::Quiet,
+                    Some(c),
+                )
+            })
+        })
+        .collect();
+    for h in handles {
+        h.join().unwrap().unwrap();
+    }
+}
+
+/// The tiny forced silo with its RVE stage spread over 3 processes (threads here, MPI ranks
+/// under `mpirun`) writes every file of the run on one process, byte for byte; its
+/// checkpoint before the opening resumes on 2 processes to the same last checkpoint.
+#[test]
+fn processes_sharing_the_rves_write_the_files_of_one_process() {
+    let dir = scratch("processes");
+    let file = short(&dir, "forced", |t| {
+        let t = edit(t, "cell_size = \"0.1 m\"", "cell_size = \"0.2 m\"");
+        edit(t, "disks = 400", "disks = 30")
+    });
+    let one = dir.join("one");
+    let o = run(&file, &one, None, Some(2));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let three = dir.join("three");
+    run_on_threads(3, &file, &three, None);
+    let (a, b) = (files(&one), files(&three));
+    assert_eq!(
+        a.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        b.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    for ((name, x), (_, y)) in a.iter().zip(&b) {
+        assert!(x == y, "{} differs", name.display());
+    }
+    let summary = std::fs::read_to_string(three.join("summary.md")).unwrap();
+    assert!(summary.contains("RVE stage on 3 processes"), "{summary}");
+    let two = dir.join("two");
+    run_on_threads(
+        2,
+        &file,
+        &two,
+        Some(&three.join("checkpoints/step_0000000006.ckpt")),
+    );
+    let last = "checkpoints/step_0000000020.ckpt";
+    assert_eq!(
+        std::fs::read(two.join(last)).unwrap(),
+        std::fs::read(one.join(last)).unwrap()
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

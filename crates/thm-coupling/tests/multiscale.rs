@@ -2,15 +2,16 @@
 //! friction heat against friction work, the DEM time rule, the sign and layout of the
 //! exchange, and bad input.
 
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use proptest::prelude::*;
 use thm_coupling::multiscale::stages::{
     axial_moduli, contact_measures, dem_substeps, mpm_response,
 };
 use thm_coupling::multiscale::{
-    DemTimeRule, GranularRod, MultiscaleError, MultiscaleParams, PointOutcome, QuasiStaticLimits,
-    RodModel, RveMaterial, RvePoint, partition, rve_cost,
+    DemTimeRule, Distribution, GranularRod, MultiscaleError, MultiscaleParams, PointOutcome,
+    QuasiStaticLimits, RodModel, RveMaterial, RvePoint, ThreadGroup, distributed, partition,
+    rve_cost,
 };
 use thm_mpm::{
     BatchConstitutive, GridParameters, MaterialInput, MaterialPoints, MaterialResponse, Mpm,
@@ -214,6 +215,141 @@ fn partition_balances_contiguous_blocks_by_cost() {
     assert_eq!(partition(&[1.0, 1.0], 3), vec![0..1, 1..2, 2..2]);
     assert_eq!(partition(&[], 2), vec![0..0, 0..0]);
     assert_eq!(partition(&[5.0, 5.0, 5.0], 1), vec![0..3]);
+}
+
+/// A [`Distribution`] over 1, 2 and 3 processes (threads of this test, [`ThreadGroup`]):
+/// 30 heated, sheared steps with a synchronisation (and re-balancing) every 7 give, on every
+/// process, the points and diagnostics of one batch at every step; after the last
+/// synchronisation every process holds every RVE of the run on one process.
+#[test]
+fn processes_of_a_distribution_keep_the_bits_of_one_batch() {
+    let whole = {
+        let (mut mpm, mut st, mut mat) = block(2.0, -1.0, Some(40.0));
+        for _ in 0..30 {
+            mpm.step_batch(&mut st, &mut mat, DT).unwrap();
+        }
+        json(&st)
+    };
+    for size in [1, 2, 3] {
+        let results: Vec<(String, Vec<std::ops::Range<usize>>, f64)> = ThreadGroup::new(size)
+            .into_iter()
+            .map(|handle| {
+                std::thread::spawn(move || {
+                    let (mut mpm, mut st, mut mat) = block(2.0, -1.0, Some(40.0));
+                    let d = Distribution::shared(Arc::new(handle));
+                    mat.distribute(Arc::clone(&d));
+                    for step in 1..=30 {
+                        mpm.step_batch(&mut st, &mut mat, DT).unwrap();
+                        if step % 7 == 0 || step == 30 {
+                            distributed::lock(&d).synchronise(&mut st.material).unwrap();
+                        }
+                    }
+                    let g = distributed::lock(&d);
+                    (
+                        json(&st),
+                        g.blocks().to_vec(),
+                        g.stats().predicted_imbalance,
+                    )
+                })
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
+            .map(|h| h.join().unwrap())
+            .collect();
+        for (rank, (state, blocks, imbalance)) in results.iter().enumerate() {
+            assert!(*state == whole, "{size} processes: process {rank} differs");
+            assert_eq!(blocks, &results[0].1, "the same blocks everywhere");
+            assert_eq!(blocks.len(), size);
+            assert!(*imbalance >= 1.0 && imbalance.is_finite());
+        }
+    }
+}
+
+/// A block that fails on one process ends the exchange on every process with that
+/// process's message: the last point squeezed to e^-2 of its width in one step.
+#[test]
+fn a_failing_block_fails_every_process_with_its_message() {
+    let results: Vec<MultiscaleError> = ThreadGroup::new(3)
+        .into_iter()
+        .map(|handle| {
+            std::thread::spawn(move || {
+                let (_, mut st, mut mat) = block(0.0, 0.0, None);
+                mat.distribute(Distribution::shared(Arc::new(handle)));
+                let n = st.material.len();
+                let inputs: Vec<_> = (0..n)
+                    .map(|point| MaterialInput {
+                        point,
+                        velocity_gradient: if point + 1 == n {
+                            [-20000.0, 0.0, 0.0, 0.0]
+                        } else {
+                            [0.0; 4]
+                        },
+                        deformation_gradient: [1.0, 0.0, 0.0, 1.0],
+                        temperature: 20.0,
+                        temperature_rate: 0.0,
+                        stress: [0.0; 3],
+                        density: 2650.0,
+                        dt: 1e-4,
+                    })
+                    .collect();
+                let mut out = vec![MaterialResponse::default(); n];
+                mat.respond_batch(&mut st.material, &inputs, &mut out)
+                    .unwrap_err()
+            })
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .map(|h| h.join().unwrap())
+        .collect();
+    for e in &results {
+        assert_eq!(e, &results[0]);
+        match e {
+            MultiscaleError::Distributed {
+                process, message, ..
+            } => {
+                assert_eq!(*process, 2);
+                assert!(
+                    message.contains("RVE of material point 8 failed"),
+                    "{message}"
+                );
+            }
+            other => panic!("unexpected {other}"),
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// The partition's invariants: `parts` contiguous blocks covering every point in order,
+    /// none empty while there are points enough, and no block heavier than its fair share
+    /// plus the heaviest single point (the prefix-sum cut).
+    #[test]
+    fn partition_is_contiguous_complete_and_balanced(
+        costs in proptest::collection::vec(0.0f64..100.0, 0..60),
+        parts in 1usize..9,
+    ) {
+        let blocks = partition(&costs, parts);
+        prop_assert_eq!(blocks.len(), parts);
+        prop_assert_eq!(blocks[0].start, 0);
+        prop_assert_eq!(blocks[parts - 1].end, costs.len());
+        for w in blocks.windows(2) {
+            prop_assert_eq!(w[0].end, w[1].start);
+        }
+        if costs.len() >= parts {
+            prop_assert!(blocks.iter().all(|b| !b.is_empty()), "{:?}", blocks);
+        }
+        let total: f64 = costs.iter().sum();
+        let heaviest = costs.iter().copied().fold(0.0_f64, f64::max);
+        for b in &blocks {
+            let cost: f64 = costs[b.clone()].iter().sum();
+            prop_assert!(
+                cost <= total / parts as f64 + 2.0 * heaviest + 1e-9 * total,
+                "block {:?} costs {} of {}", b, cost, total
+            );
+        }
+        prop_assert_eq!(partition(&costs, parts), blocks);
+    }
 }
 
 /// Saving the state mid-run (RVE states included, serde) and continuing with a fresh

@@ -158,9 +158,9 @@ pub enum RunError {
         /// What is wrong and what is allowed.
         detail: String,
     },
-    /// Another process of a distributed run (`mpirun -np N thm run`) could not open the run;
-    /// that process prints why.
-    #[error("process {process} of the distributed run could not open it (its message says why)")]
+    /// Another process of a distributed run (`mpirun -np N thm run`) failed (opening the run,
+    /// or writing at a step); that process prints why.
+    #[error("process {process} of the distributed run failed (its message says why)")]
     OtherProcess {
         /// The lowest failing process.
         process: usize,

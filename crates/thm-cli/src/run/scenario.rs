@@ -835,7 +835,15 @@ pub fn drive<S: Scenario>(
         if let Some(c) = &opts.processes {
             interrupted = c.any(interrupted);
         }
-        run.advance(interrupted)?;
+        let advanced = run.advance(interrupted);
+        // An error one process alone saw (process 0's disk) stops every process at this step.
+        if let Some(c) = &opts.processes
+            && let Some(process) = c.first_failed(advanced.is_err())
+        {
+            advanced?;
+            return Err(RunError::OtherProcess { process });
+        }
+        advanced?;
         progress.update(run.steps_done());
         if interrupted && run.steps_done() < run.n_steps() {
             progress.finish();

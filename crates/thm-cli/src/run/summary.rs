@@ -52,7 +52,10 @@ pub struct RunInfo<'a> {
     /// The checkpoint written on interruption, if the run was interrupted.
     pub interrupted: Option<&'a Path>,
     /// In a distributed run: the process count and what process 0 measured.
-    pub processes: Option<(usize, thm_coupling::multiscale::distributed::DistributionStats)>,
+    pub processes: Option<(
+        usize,
+        thm_coupling::multiscale::distributed::DistributionStats,
+    )>,
 }
 
 /// Reads a CSV written by the driver (a history or a profile): header cells and rows.
@@ -159,14 +162,14 @@ pub fn write_summary<S: Scenario>(
         let _ = writeln!(
             md,
             "- RVE stage on {size} processes (MPI): process 0 spent {:.3} s stepping its RVE \
-             block and {:.3} s exchanging outcomes ({} per step, waiting for the slowest \
+             block and {:.3} s exchanging outcomes ({:.3e} s per step, waiting for the slowest \
              process included) over {} exchanges; {} synchronisations of the RVEs took {:.3} s \
              and brought {:.3} MB; imbalance, largest over mean: {:.3} by the cost of the \
              current blocks, {:.3} measured (block seconds between the last two \
              synchronisations)",
             st.compute_seconds,
             st.comm_seconds,
-            format!("{:.3e} s", per_step(st.comm_seconds)),
+            per_step(st.comm_seconds),
             st.exchanges,
             st.syncs,
             st.sync_seconds,

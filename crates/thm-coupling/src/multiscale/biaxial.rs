@@ -71,8 +71,8 @@ use thm_mpm::{
 };
 use thm_rve::{ConsolidationParams, PackingParams, RveParams, RveState, consolidate, measure};
 
-use super::error::MultiscaleError;
 use super::distributed::{self, SharedDistribution};
+use super::error::MultiscaleError;
 use super::material::{RveMaterial, RvePoint};
 use super::params::{DemTimeRule, MultiscaleParams, QuasiStaticLimits};
 

@@ -71,8 +71,8 @@ use thm_rve::{ConsolidationParams, PackingParams, RveParams, RveState, consolida
 
 use std::sync::Arc;
 
-use super::error::MultiscaleError;
 use super::distributed::{self, SharedDistribution};
+use super::error::MultiscaleError;
 use super::material::{RveMaterial, RvePoint};
 use super::params::{DemTimeRule, MultiscaleParams};
 

@@ -41,7 +41,8 @@ pub struct RvePoint {
 impl RvePoint {
     /// Recounts [`RvePoint::intact_bonds`] from the RVE (after bonds are installed).
     pub fn count_bonds(&mut self) {
-        self.intact_bonds = u32::try_from(self.rve.contacts.intact_bond_count()).unwrap_or(u32::MAX);
+        self.intact_bonds =
+            u32::try_from(self.rve.contacts.intact_bond_count()).unwrap_or(u32::MAX);
     }
 }
 

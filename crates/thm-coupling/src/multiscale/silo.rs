@@ -46,8 +46,8 @@ use thm_mpm::{
 use thm_rve::{RveParams, RveState};
 
 use super::column::{ColumnPacking, consolidated_packing, reduce_cells};
-use super::error::MultiscaleError;
 use super::distributed::{self, SharedDistribution};
+use super::error::MultiscaleError;
 use super::material::{RveMaterial, RvePoint};
 use super::params::{DemTimeRule, MultiscaleParams};
 

@@ -14,8 +14,8 @@
 //! (grid, plates, consolidated template) is rebuilt from the parameters on resume.
 
 use serde::{Deserialize, Serialize};
-use thm_coupling::multiscale::distributed::SharedDistribution;
 use thm_coupling::multiscale::biaxial::{BiaxialModel, BiaxialTest, BiaxialTotals, Compaction};
+use thm_coupling::multiscale::distributed::SharedDistribution;
 use thm_coupling::multiscale::{RvePoint, biaxial::BiaxialRecord};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 use thm_mpm::{BatchConstitutive, MpmState};
@@ -135,10 +135,7 @@ impl MpmDemBiaxial {
 
 /// Intact bonds over all RVEs.
 fn intact_bonds(mpm: &MpmState<RvePoint>) -> usize {
-    mpm.material
-        .iter()
-        .map(|p| p.intact_bonds as usize)
-        .sum()
+    mpm.material.iter().map(|p| p.intact_bonds as usize).sum()
 }
 
 impl Scenario for MpmDemBiaxial {
@@ -157,8 +154,8 @@ impl Scenario for MpmDemBiaxial {
         let (step, time) = (state.mpm.step, state.mpm.time);
         self.with_state(state, |m| m.synchronise())
             .map_err(|e| RunError::Physics {
-                step: step,
-                time: time,
+                step,
+                time,
                 message: e.to_string(),
             })
     }

@@ -15,9 +15,9 @@
 //! plates, consolidated template) are rebuilt from the parameters on resume.
 
 use serde::{Deserialize, Serialize};
-use thm_coupling::multiscale::distributed::SharedDistribution;
 use thm_coupling::multiscale::RvePoint;
 use thm_coupling::multiscale::column::{ColumnModel, ColumnRecord, ColumnTest, ColumnTotals};
+use thm_coupling::multiscale::distributed::SharedDistribution;
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 use thm_mpm::MpmState;
 
@@ -135,8 +135,8 @@ impl Scenario for MpmDemColumn {
         let (step, time) = (state.mpm.step, state.mpm.time);
         self.with_state(state, |m| m.synchronise())
             .map_err(|e| RunError::Physics {
-                step: step,
-                time: time,
+                step,
+                time,
                 message: e.to_string(),
             })
     }

@@ -85,7 +85,8 @@ impl Scenario for MpmDemRod {
     type State = MpmState<RvePoint>;
 
     fn distribute(&mut self, distribution: &SharedDistribution) -> Result<(), RunError> {
-        self.material.distribute(std::sync::Arc::clone(distribution));
+        self.material
+            .distribute(std::sync::Arc::clone(distribution));
         Ok(())
     }
 
@@ -94,10 +95,10 @@ impl Scenario for MpmDemRod {
             thm_coupling::multiscale::distributed::lock(d)
                 .synchronise(&mut state.material)
                 .map_err(|e| RunError::Physics {
-                step: state.step,
-                time: state.time,
-                message: e.to_string(),
-            })?;
+                    step: state.step,
+                    time: state.time,
+                    message: e.to_string(),
+                })?;
         }
         Ok(())
     }

@@ -17,8 +17,8 @@
 //! sums and the discharge samples.
 
 use serde::{Deserialize, Serialize};
-use thm_coupling::multiscale::distributed::SharedDistribution;
 use thm_coupling::multiscale::RvePoint;
+use thm_coupling::multiscale::distributed::SharedDistribution;
 use thm_coupling::multiscale::silo::{SiloModel, SiloRecord, SiloTest, SiloTotals};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 use thm_mpm::MpmState;
@@ -127,8 +127,8 @@ impl Scenario for MpmDemSilo {
         let (step, time) = (state.mpm.step, state.mpm.time);
         self.with_state(state, |m| m.synchronise())
             .map_err(|e| RunError::Physics {
-                step: step,
-                time: time,
+                step,
+                time,
                 message: e.to_string(),
             })
     }

@@ -110,7 +110,8 @@ impl Scenario for MpmDemSquare {
     type State = SquareState;
 
     fn distribute(&mut self, distribution: &SharedDistribution) -> Result<(), RunError> {
-        self.material.distribute(std::sync::Arc::clone(distribution));
+        self.material
+            .distribute(std::sync::Arc::clone(distribution));
         Ok(())
     }
 
@@ -119,10 +120,10 @@ impl Scenario for MpmDemSquare {
             thm_coupling::multiscale::distributed::lock(d)
                 .synchronise(&mut state.multiscale.material)
                 .map_err(|e| RunError::Physics {
-                step: state.multiscale.step,
-                time: state.multiscale.time,
-                message: e.to_string(),
-            })?;
+                    step: state.multiscale.step,
+                    time: state.multiscale.time,
+                    message: e.to_string(),
+                })?;
         }
         Ok(())
     }
