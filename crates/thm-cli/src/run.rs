@@ -100,6 +100,16 @@ pub fn run(args: &RunArgs) -> ExitCode {
     let processes = mpi.as_ref().and_then(|(_, c)| c.clone());
     #[cfg(not(feature = "mpi"))]
     let processes: Option<Arc<dyn thm_coupling::multiscale::Collective>> = None;
+    #[cfg(not(feature = "mpi"))]
+    if let Some(n) = launched_processes().filter(|&n| n > 1) {
+        // N copies of a build without MPI would each run the whole scenario into one folder.
+        eprintln!(
+            "error: this thm was built without the feature `mpi` but was started as one of {n} \
+             MPI processes; build it with `cargo build --release -p thm-cli --features mpi` \
+             (docs/cluster.md) or run it without mpirun"
+        );
+        return ExitCode::FAILURE;
+    }
     let primary = processes.as_ref().is_none_or(|c| c.rank() == 0);
 
     let interrupt = Arc::new(AtomicBool::new(false));
@@ -126,6 +136,14 @@ pub fn run(args: &RunArgs) -> ExitCode {
         };
     }
     report(args, &out, result)
+}
+
+/// The process count an MPI launcher (Open MPI, MPICH/Hydra) announced in the
+/// environment, if any.
+pub fn launched_processes() -> Option<usize> {
+    ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE"]
+        .iter()
+        .find_map(|k| std::env::var(k).ok()?.parse().ok())
 }
 
 /// Prints how a run ended and returns the exit code.

@@ -73,3 +73,41 @@ fn a_bad_value_fails_with_the_key_path_and_writes_nothing() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A build without the feature `mpi` started by an MPI launcher as one of several processes
+/// refuses to run (each copy would run the whole scenario into the same folder) and says how
+/// to build the one that spreads the RVEs; it writes nothing.
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn a_build_without_mpi_under_mpirun_refuses_and_writes_nothing() {
+    let dir = scratch("no-mpi");
+    let out = dir.join("out");
+    for var in ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE"] {
+        let o = thm()
+            .args(["run"])
+            .arg(shipped("lumped_cooling.toml"))
+            .arg("--out")
+            .arg(&out)
+            .env(var, "2")
+            .output()
+            .unwrap();
+        assert!(!o.status.success(), "{var}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains("one of 2 MPI processes") && err.contains("--features mpi"),
+            "{var}: {err}"
+        );
+        assert!(!out.exists(), "{var}: wrote {}", out.display());
+    }
+    // One process announced is a plain run.
+    let o = thm()
+        .args(["run"])
+        .arg(shipped("lumped_cooling.toml"))
+        .arg("--out")
+        .arg(&out)
+        .env("OMPI_COMM_WORLD_SIZE", "1")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -22,6 +22,7 @@ const MAX_STEPPERS: usize = 64;
 pub struct RveBatch {
     steppers: Vec<RveStepper>,
     count: usize,
+    seconds: Vec<f64>,
 }
 
 impl RveBatch {
@@ -30,6 +31,7 @@ impl RveBatch {
         Self {
             steppers: vec![RveStepper::new(config); count.clamp(1, MAX_STEPPERS)],
             count,
+            seconds: vec![0.0; count],
         }
     }
 
@@ -41,6 +43,13 @@ impl RveBatch {
     /// True when the batch is empty.
     pub fn is_empty(&self) -> bool {
         self.count == 0
+    }
+
+    /// Wall-clock seconds each RVE took in the last [`RveBatch::respond_into`] (a measured
+    /// cost, e.g. for balancing RVEs over processes; it varies from run to run and no result
+    /// depends on it). Zero for an RVE that was not stepped.
+    pub fn step_seconds(&self) -> &[f64] {
+        &self.seconds
     }
 
     /// Heap memory of the scratch steppers \[bytes\].
@@ -107,6 +116,8 @@ impl RveBatch {
             return Ok(());
         }
         let chunk = n.div_ceil(self.steppers.len());
+        self.seconds.clear();
+        self.seconds.resize(n, 0.0);
         let first_error = self
             .steppers
             .par_iter_mut()
@@ -114,21 +125,28 @@ impl RveBatch {
                 states
                     .par_chunks_mut(chunk)
                     .zip(loads.par_chunks(chunk))
-                    .zip(responses.par_chunks_mut(chunk)),
+                    .zip(responses.par_chunks_mut(chunk))
+                    .zip(self.seconds.par_chunks_mut(chunk)),
             )
             .with_min_len(1)
             .enumerate()
-            .filter_map(|(c, (stepper, ((states, loads), responses)))| {
+            .filter_map(|(c, (stepper, (((states, loads), responses), seconds)))| {
                 let mut first = None;
-                for (j, ((state, load), response)) in
-                    states.iter_mut().zip(loads).zip(responses).enumerate()
+                for (j, (((state, load), response), seconds)) in states
+                    .iter_mut()
+                    .zip(loads)
+                    .zip(responses)
+                    .zip(seconds)
+                    .enumerate()
                 {
+                    let start = std::time::Instant::now();
                     match stepper.respond(state.as_mut(), load) {
                         Ok(r) => *response = r,
                         Err(e) => {
                             first.get_or_insert((c * chunk + j, e));
                         }
                     }
+                    *seconds = start.elapsed().as_secs_f64();
                 }
                 first
             })

@@ -3,10 +3,10 @@
 //!
 //! Every process runs the same MPM step, which is cheap next to the RVEs and deterministic, so
 //! the processes stay in lock-step. The material points are cut into one contiguous block per
-//! process ([`partition`], balanced by [`rve_cost`]); a process steps only its block's RVEs
+//! process ([`partition`] of a per-point cost); a process steps only its block's RVEs
 //! ([`RveMaterial::step_block`], rayon threads inside) and the processes all-gather one
-//! fixed-size record per point ([`PointOutcome`] and the point's cost, [`WIRE_LEN`] numbers)
-//! in point order. Each RVE is stepped alone and nothing is reduced across RVEs, so every
+//! fixed-size record per point ([`PointOutcome`] and the seconds its RVE took, [`WIRE_LEN`]
+//! numbers) in point order. Each RVE is stepped alone and nothing is reduced across RVEs, so every
 //! process continues with the bits of a run on one process, whatever the process and thread
 //! counts.
 //!
@@ -15,8 +15,11 @@
 //! their disks. [`Distribution::synchronise`] all-gathers the owned RVEs so that every
 //! process holds every current RVE (the caller does it before anything reads the disks: a
 //! frame, a checkpoint, the summary, an event that changes every RVE), and then re-balances
-//! the blocks by the costs of the last step: a deterministic assignment, the same on every
-//! process. A checkpoint written after it is the same file as a run on one process writes, so
+//! the blocks by measured cost: each point's RVE seconds summed since the last re-balancing,
+//! which every process holds alike (they travel with the outcomes), so the assignment is
+//! deterministic given the measurements and the same on every process. The first blocks,
+//! before anything is measured, balance [`rve_cost`] (contacts × substeps). No bit of any
+//! result depends on the assignment. A checkpoint written after it is the same file as a run on one process writes, so
 //! a run resumes with any process count.
 //!
 //! A block that fails (an RVE that breaks down) sets a flag that every process reduces; the
@@ -39,7 +42,7 @@ use super::material::{PointOutcome, RveMaterial, RvePoint, partition, rve_cost};
 
 /// Numbers per point on the wire: the 7 of the response (stress, heat source,
 /// conductivity), 5 diagnostics, the substeps and intact bonds (integers, exact as `f64`) and
-/// the point's cost.
+/// the seconds the point's RVE took (its measured cost).
 pub const WIRE_LEN: usize = 15;
 
 /// The collective operations a distributed RVE stage needs. Every process calls each of them
@@ -79,7 +82,8 @@ pub struct DistributionStats {
     pub sync_seconds: f64,
     /// Bytes of RVE state this process received in synchronisations.
     pub sync_bytes: u64,
-    /// Largest over mean of the blocks' costs ([`rve_cost`]) as assigned now.
+    /// Largest over mean of the blocks' costs as assigned now (by the RVE seconds they were
+    /// re-balanced by; by [`rve_cost`] before the first re-balancing).
     pub predicted_imbalance: f64,
     /// Largest over mean of the processes' block compute seconds between the last two
     /// synchronisations (1 when balanced; 0 before the first).
@@ -91,7 +95,10 @@ pub struct DistributionStats {
 pub struct Distribution {
     collective: Arc<dyn Collective>,
     blocks: Vec<Range<usize>>,
+    /// Per point: [`rve_cost`] until an exchange is measured, then the RVE seconds summed
+    /// since the last re-balancing.
     costs: Vec<f64>,
+    measured: bool,
     outcomes: Vec<PointOutcome>,
     send: Vec<f64>,
     recv: Vec<f64>,
@@ -119,6 +126,7 @@ impl Distribution {
             collective,
             blocks: Vec::new(),
             costs: Vec::new(),
+            measured: false,
             outcomes: Vec::new(),
             send: Vec::new(),
             recv: Vec::new(),
@@ -156,11 +164,21 @@ impl Distribution {
         if self.blocks.last().map(|b| b.end) != Some(n) || self.costs.len() != n {
             self.costs.clear();
             self.costs.extend(states.iter().map(rve_cost));
+            self.measured = false;
             self.rebalance();
         }
     }
 
+    /// Blocks that balance the current costs; the measured ones then start again from zero.
     fn rebalance(&mut self) {
+        self.partition_costs();
+        if self.measured {
+            self.costs.fill(0.0);
+            self.measured = false;
+        }
+    }
+
+    fn partition_costs(&mut self) {
         let size = self.collective.size();
         self.blocks = partition(&self.costs, size);
         let total: f64 = self.costs.iter().sum();
@@ -229,11 +247,11 @@ impl Distribution {
             });
         }
         self.send.clear();
-        for (out, s) in self.outcomes[mine.clone()]
+        for (out, &seconds) in self.outcomes[mine.clone()]
             .iter()
-            .zip(&states[mine.clone()])
+            .zip(material.step_seconds())
         {
-            encode(out, rve_cost(s), &mut self.send);
+            encode(out, seconds, &mut self.send);
         }
         self.counts.clear();
         self.counts
@@ -242,13 +260,19 @@ impl Distribution {
         self.collective
             .all_gather_f64(&self.send, &self.counts, &mut self.recv);
         self.stats.comm_seconds += t1.elapsed().as_secs_f64();
+        if !self.measured {
+            self.costs.fill(0.0);
+            self.measured = true;
+        }
         for ((w, out), c) in self
             .recv
             .chunks_exact(WIRE_LEN)
             .zip(self.outcomes.iter_mut())
             .zip(self.costs.iter_mut())
         {
-            (*out, *c) = decode(w);
+            let seconds;
+            (*out, seconds) = decode(w);
+            *c += seconds;
         }
         material.finish(states, &self.outcomes, responses);
         material.check_quasi_static(states)
@@ -256,7 +280,8 @@ impl Distribution {
 
     /// Brings every process's copy of every RVE up to date (each process sends the RVEs of
     /// its block, `bincode`-encoded, and takes the others'), measures the imbalance since the
-    /// last synchronisation and re-balances the blocks by the last step's costs. Every
+    /// last synchronisation and re-balances the blocks by the RVE seconds measured since the
+    /// last re-balancing. Every
     /// process must call it at the same point. Before the first exchange there is nothing to
     /// bring (every process holds the same start).
     pub fn synchronise(&mut self, states: &mut [RvePoint]) -> Result<(), MultiscaleError> {

@@ -96,9 +96,10 @@ impl PointOutcome {
     }
 }
 
-/// The cost measure [`partition`] balances by: the point's contacts × DEM substeps of its
-/// last step (at least 1 each, so a fresh RVE counts its contacts). Deterministic: the same
-/// on every process holding the point's history.
+/// A cost estimate from the point's history alone: its contacts × DEM substeps of its last
+/// step (at least 1 each, so a fresh RVE counts its contacts). Deterministic: the same on
+/// every process holding the point's history; a distributed run balances its first blocks by
+/// it, and later ones by measured seconds (see [`super::distributed`]).
 pub fn rve_cost(point: &RvePoint) -> f64 {
     let contacts = point.rve.contacts.force_on_b.len().max(1) as f64;
     contacts * f64::from(point.substeps.max(1))
@@ -311,6 +312,12 @@ impl RveMaterial {
     /// [`super::distributed`]); every exchange from now on steps only this process's block.
     pub fn distribute(&mut self, distribution: SharedDistribution) {
         self.distribution = Some(distribution);
+    }
+
+    /// Wall-clock seconds each RVE of the last [`RveMaterial::step_block`] took (its block's
+    /// points in order; a measured cost for balancing, no result depends on it).
+    pub fn step_seconds(&self) -> &[f64] {
+        self.batch.step_seconds()
     }
 
     /// The distribution, if the RVE stage is spread over processes.
