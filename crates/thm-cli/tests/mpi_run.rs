@@ -7,6 +7,8 @@
 //!   last checkpoint;
 //! - an output folder that already holds a run (process 0 alone touches it) ends every
 //!   process with process 0's message;
+//! - a write that fails on process 0 alone part-way ends every process at that step with its
+//!   message, and the last checkpoint continues;
 //! - a killed process ends the job with a non-zero status, and the last checkpoint written
 //!   before it is intact and continues (without MPI) to the bits of the run never killed.
 
@@ -92,8 +94,22 @@ fn is_root() -> bool {
 }
 
 fn run(np: Option<usize>, file: &Path, out: &Path, resume: Option<&Path>) -> Output {
+    run_threads(np, 1, file, out, resume)
+}
+
+fn run_threads(
+    np: Option<usize>,
+    threads: usize,
+    file: &Path,
+    out: &Path,
+    resume: Option<&Path>,
+) -> Output {
     let mut c = match np {
-        Some(np) => mpirun(np),
+        Some(np) => {
+            let mut c = mpirun(np);
+            c.env("RAYON_NUM_THREADS", threads.to_string());
+            c
+        }
         None => {
             let mut c = Command::new(thm());
             c.env("RAYON_NUM_THREADS", "2");
@@ -152,7 +168,8 @@ fn one_two_and_three_processes_write_the_files_of_a_run_without_mpi() {
         ok(&run(None, &file, &serial, None), "serial");
         for np in 1..=3 {
             let out = dir.join(format!("{name}-{np}"));
-            let o = run(Some(np), &file, &out, None);
+            // 2 ranks run 2 threads each: any thread count inside a rank.
+            let o = run_threads(Some(np), if np == 2 { 2 } else { 1 }, &file, &out, None);
             ok(&o, &format!("{name} on {np} processes"));
             same_files(&serial, &out, &format!("{name} on {np} processes"));
             let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
@@ -205,6 +222,104 @@ fn an_output_folder_only_process_zero_refuses_ends_every_process() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// The newest complete checkpoint of `out` continues (without MPI) to the bits of the run
+/// of `file` never stopped, 6 steps further.
+fn newest_checkpoint_continues(dir: &Path, file: &Path, out: &Path) {
+    let newest = thm_cli::run::last_complete_checkpoint(out).expect("a complete checkpoint");
+    let step: u64 = newest
+        .file_stem()
+        .unwrap()
+        .to_string_lossy()
+        .trim_start_matches("step_")
+        .parse()
+        .unwrap();
+    let upto = step + 6;
+    let t = std::fs::read_to_string(file).unwrap();
+    let short = dir.join("short.toml");
+    std::fs::write(
+        &short,
+        edit(t, "end = \"2 s\"", &format!("end = \"{upto} ms\"")),
+    )
+    .unwrap();
+    let resumed = dir.join("resumed");
+    ok(&run(None, &short, &resumed, Some(&newest)), "resumed");
+    let whole = dir.join("whole");
+    ok(&run(None, &short, &whole, None), "whole");
+    let last = format!("checkpoints/step_{upto:010}.ckpt");
+    assert_eq!(
+        std::fs::read(resumed.join(&last)).unwrap(),
+        std::fs::read(whole.join(&last)).unwrap()
+    );
+}
+
+/// The tiny silo for 2 s (long enough to be stopped part-way), started on 2 ranks; returns
+/// the file and the job once it has written 3 checkpoints.
+fn long_job(dir: &Path, out: &Path) -> (PathBuf, std::process::Child) {
+    let text = std::fs::read_to_string(tiny_silo(dir)).unwrap();
+    let file = dir.join("long.toml");
+    std::fs::write(&file, edit(text, "end = \"20 ms\"", "end = \"2 s\"")).unwrap();
+    let mut c = mpirun(2);
+    c.arg("run").arg(&file).arg("--out").arg(out);
+    let mut job = c
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    let ckpts = |out: &Path| {
+        std::fs::read_dir(out.join("checkpoints"))
+            .map(|d| d.count())
+            .unwrap_or(0)
+    };
+    while ckpts(out) < 3 {
+        assert!(
+            start.elapsed() < Duration::from_secs(300),
+            "no checkpoints after 300 s"
+        );
+        assert!(job.try_wait().unwrap().is_none(), "the job ended early");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    (file, job)
+}
+
+fn wait_for(job: &mut std::process::Child, what: &str) -> std::process::ExitStatus {
+    let start = Instant::now();
+    loop {
+        if let Some(s) = job.try_wait().unwrap() {
+            return s;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "the job did not end after {what}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// A write that fails on rank 0 alone (its frame folder replaced by a file part-way) ends
+/// both ranks at that step with rank 0's message, instead of leaving rank 1 waiting in the
+/// next exchange; the last checkpoint is intact and continues.
+#[test]
+fn a_write_only_rank_zero_fails_ends_every_rank() {
+    let dir = scratch("write-fails");
+    let out = dir.join("out");
+    let (file, mut job) = long_job(&dir, &out);
+    let frames = out.join("material_points");
+    std::fs::rename(&frames, dir.join("moved_frames")).unwrap();
+    std::fs::write(&frames, b"not a folder").unwrap();
+    let status = wait_for(&mut job, "its frame folder was replaced");
+    assert!(!status.success());
+    let mut err = String::new();
+    std::io::Read::read_to_string(job.stderr.as_mut().unwrap(), &mut err).unwrap();
+    assert!(
+        err.contains("error: ") && err.contains("material_points"),
+        "{err}"
+    );
+    assert!(err.contains("the last complete checkpoint is"), "{err}");
+    newest_checkpoint_continues(&dir, &file, &out);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// The pids of `thm` processes whose environment says they are MPI rank `rank`, children of
 /// the job started by this test (found through /proc).
 fn rank_pids(rank: usize, out: &Path) -> Vec<u32> {
@@ -233,33 +348,8 @@ fn rank_pids(rank: usize, out: &Path) -> Vec<u32> {
 #[test]
 fn a_killed_process_ends_the_job_and_leaves_the_last_checkpoint_intact() {
     let dir = scratch("killed");
-    // Long enough to be killed part-way: 2 s of the tiny silo, a checkpoint every 6 steps.
-    let text = std::fs::read_to_string(tiny_silo(&dir)).unwrap();
-    let file = dir.join("long.toml");
-    std::fs::write(&file, edit(text, "end = \"20 ms\"", "end = \"2 s\"")).unwrap();
     let out = dir.join("out");
-    let mut c = mpirun(2);
-    c.arg("run").arg(&file).arg("--out").arg(&out);
-    let mut job = c
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    // Wait for a few checkpoints, then kill rank 1.
-    let start = Instant::now();
-    let ckpts = |out: &Path| {
-        std::fs::read_dir(out.join("checkpoints"))
-            .map(|d| d.count())
-            .unwrap_or(0)
-    };
-    while ckpts(&out) < 3 {
-        assert!(
-            start.elapsed() < Duration::from_secs(300),
-            "no checkpoints after 300 s"
-        );
-        assert!(job.try_wait().unwrap().is_none(), "the job ended early");
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    let (file, mut job) = long_job(&dir, &out);
     let victims = rank_pids(1, &out);
     assert_eq!(victims.len(), 1, "rank 1 of the job: {victims:?}");
     Command::new("kill")
@@ -267,44 +357,10 @@ fn a_killed_process_ends_the_job_and_leaves_the_last_checkpoint_intact() {
         .arg(victims[0].to_string())
         .status()
         .unwrap();
-    let killed = Instant::now();
-    let status = loop {
-        if let Some(s) = job.try_wait().unwrap() {
-            break s;
-        }
-        assert!(
-            killed.elapsed() < Duration::from_secs(120),
-            "the job did not end after its rank 1 was killed"
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    };
+    let status = wait_for(&mut job, "its rank 1 was killed");
     assert!(!status.success());
     // The newest checkpoint is intact and continues (without MPI) to the bits of the run
-    // never killed, up to the same step.
-    let newest = thm_cli::run::last_complete_checkpoint(&out).expect("a complete checkpoint");
-    let step: u64 = newest
-        .file_stem()
-        .unwrap()
-        .to_string_lossy()
-        .trim_start_matches("step_")
-        .parse()
-        .unwrap();
-    let upto = step + 6;
-    let t = std::fs::read_to_string(&file).unwrap();
-    let short = dir.join("short.toml");
-    std::fs::write(
-        &short,
-        edit(t, "end = \"2 s\"", &format!("end = \"{upto} ms\"")),
-    )
-    .unwrap();
-    let resumed = dir.join("resumed");
-    ok(&run(None, &short, &resumed, Some(&newest)), "resumed");
-    let whole = dir.join("whole");
-    ok(&run(None, &short, &whole, None), "whole");
-    let last = format!("checkpoints/step_{upto:010}.ckpt");
-    assert_eq!(
-        std::fs::read(resumed.join(&last)).unwrap(),
-        std::fs::read(whole.join(&last)).unwrap()
-    );
+    // never killed.
+    newest_checkpoint_continues(&dir, &file, &out);
     std::fs::remove_dir_all(&dir).unwrap();
 }
