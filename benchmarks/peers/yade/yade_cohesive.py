@@ -1,7 +1,14 @@
 # Runs the A-Table 1 cohesive law (CohFrictMat) on a packing written by `dem_peer write-*`
 # and prints "particles steps seconds particle_steps_per_second", like `dem_peer run-cohesive`.
 #
-#   yade -n -x yade_cohesive.py PACKING.csv STEPS DT
+#   yade -n -x yade_cohesive.py PACKING.csv STEPS DT [SPEED]
+#
+# With SPEED [m/s], the loaded case of `dem_peer run-pull`: the spheres whose surface lies
+# within the largest radius of the lowest or highest surface along y are held (all degrees of
+# freedom blocked) and move apart at SPEED each (bottom -y, top +y); the script then also
+# prints "broken_bonds N" (bonds of the file no longer intact after the timed steps),
+# "free_kinetic_energy E" (the spheres not held) and "top_grip_force_y F" (the y resultant of
+# the contact forces on the top grip).
 #
 # Bonds are created exactly for the file's bond list and made stress-free at creation
 # (YADE's bonds otherwise have their zero-force point at touching, and a bond across a gap
@@ -17,6 +24,7 @@ from yade.wrapper import (CohFrictMat, ForceResetter, InsertionSortCollider, Bo1
                           Law2_ScGeom6D_CohFrictPhys_CohesionMoment, NewtonIntegrator)
 
 path, steps, dt = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
+speed = float(sys.argv[4]) if len(sys.argv) > 4 else None
 kinematics, spheres, bonds = None, [], []
 for line in open(path):
     line = line.strip()
@@ -42,6 +50,25 @@ for (x, y, z, r) in spheres:
     if kinematics in ('spheres_in_plane', 'disks'):
         b.state.blockedDOFs = 'zXY'
     ids.append(O.bodies.append(b))
+
+top_grip, grips = [], set()
+if speed is not None:  # the grips, selected as dem_peer's pull_apart does
+    depth = max(r for (_, _, _, r) in spheres)
+    bottom = min(y - r for (_, y, _, r) in spheres)
+    top = max(y + r for (_, y, _, r) in spheres)
+    for k, (x, y, z, r) in enumerate(spheres):
+        if y - r < bottom + depth:
+            v = -speed
+        elif y + r > top - depth:
+            v = speed
+            top_grip.append(ids[k])
+        else:
+            continue
+        grips.add(ids[k])
+        s = O.bodies[ids[k]].state
+        s.blockedDOFs = 'xyzXYZ'
+        s.vel = (0.0, v, 0.0)
+        s.angVel = (0.0, 0.0, 0.0)
 
 # Largest gap bridged by a bond, as a factor on the radii sum, for detection and geometry.
 factor = 1.0
@@ -83,3 +110,13 @@ print('%d %d %.6f %.1f' % (len(ids), steps, seconds, len(ids) * steps / seconds)
 # The same observable as dem_peer's: translational + rotational kinetic energy after the timed
 # steps [J], so a run shows both codes did the same physics.
 print('kinetic_energy %.9e' % utils.kineticEnergy())
+if speed is not None:
+    print('broken_bonds %d' % (len(bonds) - intact))
+    free = 0.0
+    for b in O.bodies:
+        if b.id in grips:
+            continue
+        s = b.state
+        free += 0.5 * s.mass * s.vel.squaredNorm() + 0.5 * s.inertia[0] * s.angVel.squaredNorm()
+    print('free_kinetic_energy %.9e' % free)
+    print('top_grip_force_y %.9e' % sum(O.forces.f(i)[1] for i in top_grip))

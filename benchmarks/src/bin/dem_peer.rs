@@ -2,9 +2,10 @@
 //!
 //! ```text
 //! dem_peer write-bar FILE SEED            # the A-Sect. 3 bar (random packing, bonds ≤ 4 mm)
-//! dem_peer write-lattice FILE N PLANE|3D  # bonded lattice of about N particles
+//! dem_peer write-lattice FILE N PLANE|3D [APART]  # bonded lattice of about N particles
 //! dem_peer write-bed FILE N               # settled frictional bed of about N spheres (3D)
 //! dem_peer run-cohesive FILE STEPS DT THREADS   # A-Table 1 law, α_d = 0.08, like CohFrictMat
+//! dem_peer run-pull FILE STEPS DT THREADS SPEED # the same, pulled apart along y (below)
 //! dem_peer run-bed FILE STEPS DT THREADS        # linear spring + Coulomb, gravity, floor
 //! ```
 //!
@@ -16,6 +17,14 @@
 //! neighbour_builds B     # neighbour-list builds (Verlet searches) during the timed steps
 //! kinetic_energy E       # total kinetic energy after them, translational + rotational [J]
 //! ```
+//!
+//! `run-pull` is `run-cohesive` with the particles whose surface lies within their largest
+//! radius of the lowest or highest surface along y held (fixed) and moving apart at
+//! `SPEED` m/s each (bottom −y, top +y) from the start: a loaded case, stress waves, bonds
+//! breaking in tension and shear, new frictional contacts. It also prints `broken_bonds N`
+//! (bonds of the file no longer intact after the timed steps), `free_kinetic_energy E` (that of
+//! the particles not held, the part of the kinetic energy the held ones do not dictate) and
+//! `top_grip_force_y F` (the y resultant of the contact forces on the top grip \[N\]).
 
 use std::path::Path;
 use std::time::Instant;
@@ -71,14 +80,17 @@ fn run() -> Result<(), String> {
                 let side = (n as f64).cbrt().round() as usize;
                 [side, side, side]
             };
-            let p = lattice_packing(kin, counts, 1e-3, 42).map_err(|e| e.to_string())?;
+            let mut p = lattice_packing(kin, counts, 1e-3, 42).map_err(|e| e.to_string())?;
+            if args.get(5).map(String::as_str) == Some("APART") {
+                separate(&mut p);
+            }
             p.write_csv(Path::new(&args[2])).map_err(|e| e.to_string())
         }
         "write-bed" => {
             let n: usize = arg(&args, 3, "N")?;
             write_bed(Path::new(&args[2]), n)
         }
-        "run-cohesive" | "run-bed" => {
+        "run-cohesive" | "run-bed" | "run-pull" => {
             let packing = Packing::read_csv(Path::new(args.get(2).ok_or("missing FILE")?))
                 .map_err(|e| e.to_string())?;
             let steps: u64 = arg(&args, 3, "STEPS")?;
@@ -88,10 +100,17 @@ fn run() -> Result<(), String> {
                 .num_threads(threads)
                 .build()
                 .map_err(|e| e.to_string())?;
-            let timed = if cmd == "run-cohesive" {
+            let mut pulled = None;
+            let timed = if cmd == "run-cohesive" || cmd == "run-pull" {
                 let mut state = packing
                     .to_state(2600.0, 293.15)
                     .map_err(|e| e.to_string())?;
+                let grips = if cmd == "run-pull" {
+                    let speed: f64 = arg(&args, 6, "SPEED")?;
+                    Some(pull_apart(&mut state, speed))
+                } else {
+                    None
+                };
                 let law = CohesiveFrictionalParams::paper_a_table_1()
                     .validate()
                     .map_err(|e| e.to_string())?;
@@ -101,7 +120,27 @@ fn run() -> Result<(), String> {
                     gravity: [0.0; 3],
                     verlet_skin: 2e-4,
                 };
-                time_run(&pool, &mut state, law, params, steps)?
+                let timed = time_run(&pool, &mut state, law, params, steps)?;
+                if let Some([_, top]) = grips {
+                    let p = &state.particles;
+                    let free_kinetic_energy: f64 = (0..p.len())
+                        .filter(|&i| !p.fixed[i])
+                        .map(|i| {
+                            0.5 * p.mass[i] * p.velocity[i].norm_squared()
+                                + 0.5 * p.inertia[i] * p.angular_velocity[i].norm_squared()
+                        })
+                        .sum();
+                    pulled = Some((
+                        // Bonds of the file no longer intact (as the YADE script counts them).
+                        packing
+                            .bonds
+                            .len()
+                            .saturating_sub(state.contacts.intact_bond_count()),
+                        free_kinetic_energy,
+                        p.resultant_force(&top).y,
+                    ));
+                }
+                timed
             } else {
                 let mut state = bed_state(&packing)?;
                 let law = bed_law()?;
@@ -125,6 +164,11 @@ fn run() -> Result<(), String> {
             );
             println!("neighbour_builds {builds}");
             println!("kinetic_energy {kinetic_energy:.9e}");
+            if let Some((broken, free_kinetic_energy, top_force)) = pulled {
+                println!("broken_bonds {broken}");
+                println!("free_kinetic_energy {free_kinetic_energy:.9e}");
+                println!("top_grip_force_y {top_force:.9e}");
+            }
             Ok(())
         }
         _ => Err("usage: see the module documentation of benchmarks/src/bin/dem_peer.rs".into()),
@@ -165,6 +209,44 @@ fn time_run<L: ContactLaw>(
         builds: state.contact_generation - generation,
         kinetic_energy: state.particles.kinetic_energy(),
     })
+}
+
+/// Scales every radius by one factor so that the closest bonded pair just touches and no
+/// bonded pair overlaps. The loaded comparison needs it: YADE's fragile CohFrictPhys forgets a
+/// bond's stress-free offset when the bond breaks, so a pair bonded while overlapping is
+/// pushed apart by its whole overlap the moment it breaks (energy from nowhere), whereas
+/// `thm-dem` keeps the offset; without overlaps the two agree.
+fn separate(p: &mut Packing) {
+    let factor = p
+        .bonds
+        .iter()
+        .map(|&(a, b)| (p.centres[a] - p.centres[b]).norm() / (p.radii[a] + p.radii[b]))
+        .fold(1.0_f64, f64::min);
+    for r in &mut p.radii {
+        *r *= factor;
+    }
+}
+
+/// Holds the particles within their largest radius of the lowest and highest surfaces along
+/// y and moves them apart at `speed` \[m/s\] each (the YADE script selects the same ones);
+/// returns the two grips.
+fn pull_apart(state: &mut DemState, speed: f64) -> [Vec<usize>; 2] {
+    let p = &mut state.particles;
+    let depth = p.radius.iter().copied().fold(0.0_f64, f64::max);
+    let bottom = (0..p.len())
+        .map(|i| p.position[i].y - p.radius[i])
+        .fold(f64::INFINITY, f64::min);
+    let top = (0..p.len())
+        .map(|i| p.position[i].y + p.radius[i])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let grips = p.near_ends(bottom, top, depth);
+    for (ends, v) in grips.iter().zip([-speed, speed]) {
+        for &i in ends {
+            p.fixed[i] = true;
+            p.velocity[i] = Vec3::new(0.0, v, 0.0);
+        }
+    }
+    grips
 }
 
 fn bed_law() -> Result<LinearSpring, String> {
