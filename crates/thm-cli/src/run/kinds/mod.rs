@@ -113,6 +113,34 @@ pub(crate) fn check_count(key: &str, v: usize, lo: usize, hi: usize) -> Result<(
     }
 }
 
+/// The error of a physics that refused a step (or a synchronisation) at `step`, `time`.
+pub(crate) fn physics_error<E: std::fmt::Display>(
+    step: u64,
+    time: f64,
+) -> impl FnOnce(E) -> RunError {
+    move |e| RunError::Physics {
+        step,
+        time,
+        message: e.to_string(),
+    }
+}
+
+/// Brings every process's copy of `points` up to date when `material` is distributed (see
+/// `thm_coupling::multiscale::distributed`); nothing otherwise.
+pub(crate) fn synchronise_points(
+    material: &thm_coupling::multiscale::RveMaterial,
+    points: &mut [thm_coupling::multiscale::RvePoint],
+    step: u64,
+    time: f64,
+) -> Result<(), RunError> {
+    match material.distribution() {
+        Some(d) => thm_coupling::multiscale::distributed::lock(d)
+            .synchronise(points)
+            .map_err(physics_error(step, time)),
+        None => Ok(()),
+    }
+}
+
 fn unknown_kind(other: &str) -> ConfigError {
     ConfigError::new(
         "kind",

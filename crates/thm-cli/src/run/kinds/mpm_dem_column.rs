@@ -134,11 +134,7 @@ impl Scenario for MpmDemColumn {
     fn synchronise(&mut self, state: &mut State) -> Result<(), RunError> {
         let (step, time) = (state.mpm.step, state.mpm.time);
         self.with_state(state, |m| m.synchronise())
-            .map_err(|e| RunError::Physics {
-                step,
-                time,
-                message: e.to_string(),
-            })
+            .map_err(super::physics_error(step, time))
     }
 
     fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::run::scenario::StateArray<'s>> {

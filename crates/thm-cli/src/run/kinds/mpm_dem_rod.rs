@@ -91,16 +91,8 @@ impl Scenario for MpmDemRod {
     }
 
     fn synchronise(&mut self, state: &mut Self::State) -> Result<(), RunError> {
-        if let Some(d) = self.material.distribution() {
-            thm_coupling::multiscale::distributed::lock(d)
-                .synchronise(&mut state.material)
-                .map_err(|e| RunError::Physics {
-                    step: state.step,
-                    time: state.time,
-                    message: e.to_string(),
-                })?;
-        }
-        Ok(())
+        let (step, time) = (state.step, state.time);
+        super::synchronise_points(&self.material, &mut state.material, step, time)
     }
 
     fn arrays<'s>(&'s self, state: &'s Self::State) -> Vec<crate::run::scenario::StateArray<'s>> {

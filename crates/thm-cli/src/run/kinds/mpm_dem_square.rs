@@ -116,16 +116,8 @@ impl Scenario for MpmDemSquare {
     }
 
     fn synchronise(&mut self, state: &mut Self::State) -> Result<(), RunError> {
-        if let Some(d) = self.material.distribution() {
-            thm_coupling::multiscale::distributed::lock(d)
-                .synchronise(&mut state.multiscale.material)
-                .map_err(|e| RunError::Physics {
-                    step: state.multiscale.step,
-                    time: state.multiscale.time,
-                    message: e.to_string(),
-                })?;
-        }
-        Ok(())
+        let (step, time) = (state.multiscale.step, state.multiscale.time);
+        super::synchronise_points(&self.material, &mut state.multiscale.material, step, time)
     }
 
     fn arrays<'s>(&'s self, state: &'s SquareState) -> Vec<crate::run::scenario::StateArray<'s>> {
