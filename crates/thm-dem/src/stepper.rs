@@ -135,6 +135,10 @@ pub struct Stepper<L: ContactLaw> {
     /// A listed pair found apart (and unbonded, without shear) stays apart while the drift
     /// (see [`Drift`]) is below its entry: it is not looked at again until then.
     quiet_below: Vec<f64>,
+    /// Per contact, scratch of the contact pass: a block first lists the indices of its
+    /// contacts that are not quiet (ascending, without a branch on quietness, which follows
+    /// no pattern a branch predictor could learn) and then evaluates only those.
+    live: Vec<u32>,
 }
 
 /// How far the particles moved since the last neighbour search, as two bounds.
@@ -176,6 +180,7 @@ impl<L: ContactLaw> Stepper<L> {
             touched: Vec::new(),
             stamp: 0,
             quiet_below: Vec::new(),
+            live: Vec::new(),
         }
     }
 
@@ -275,6 +280,7 @@ impl<L: ContactLaw> Stepper<L> {
         reserve_to(&mut self.active, headroom);
         reserve_to(&mut self.spill, headroom);
         reserve_to(&mut self.quiet_below, headroom);
+        reserve_to(&mut self.live, headroom);
         reserve_to(&mut self.b_entry, headroom);
 
         self.candidates.clear();
@@ -373,6 +379,7 @@ impl<L: ContactLaw> Stepper<L> {
             ..
         } = state;
         self.active.resize(contacts.len(), 0);
+        self.live.resize(contacts.len(), 0);
         self.spill.resize(contacts.len(), [Vec3::ZERO; 2]);
         self.block_force.resize(n, Vec3::ZERO);
         self.block_torque.resize(n, Vec3::ZERO);
@@ -398,6 +405,7 @@ impl<L: ContactLaw> Stepper<L> {
             report: &mut contacts.report,
             active: &mut self.active,
             quiet: &mut self.quiet_below,
+            live: &mut self.live,
             spill: &mut self.spill,
             wall_pair: &wall_contacts.pair,
             wall_history: &mut wall_contacts.history,
@@ -599,6 +607,7 @@ struct BlockSlices<'a> {
     report: &'a mut [ContactReport],
     active: &'a mut [u8],
     quiet: &'a mut [f64],
+    live: &'a mut [u32],
     spill: &'a mut [[Vec3; 2]],
     wall_pair: &'a [[u32; 2]],
     wall_history: &'a mut [ContactHistory],
@@ -615,6 +624,7 @@ impl<'a> BlockSlices<'a> {
         let (report, report_rest) = self.report.split_at_mut(c);
         let (active, active_rest) = self.active.split_at_mut(c);
         let (quiet, quiet_rest) = self.quiet.split_at_mut(c);
+        let (live, live_rest) = self.live.split_at_mut(c);
         let (spill, spill_rest) = self.spill.split_at_mut(c);
         let (wall_pair, wall_pair_rest) = self.wall_pair.split_at(w);
         let (wall_history, wall_history_rest) = self.wall_history.split_at_mut(w);
@@ -628,6 +638,7 @@ impl<'a> BlockSlices<'a> {
                 report,
                 active,
                 quiet,
+                live,
                 spill,
                 wall_pair,
                 wall_history,
@@ -641,6 +652,7 @@ impl<'a> BlockSlices<'a> {
                 report: report_rest,
                 active: active_rest,
                 quiet: quiet_rest,
+                live: live_rest,
                 spill: spill_rest,
                 wall_pair: wall_pair_rest,
                 wall_history: wall_history_rest,
@@ -717,6 +729,7 @@ impl<L: ContactLaw> BlockPass<'_, L> {
             report,
             active,
             quiet,
+            live,
             spill,
             wall_pair,
             wall_history,
@@ -735,24 +748,33 @@ impl<L: ContactLaw> BlockPass<'_, L> {
         );
         let (drift, dt) = (self.drift, self.dt);
         let (mut broke, mut count) = (false, 0);
-        for (((((h, rep), on), q), sp), pair) in history
-            .iter_mut()
-            .zip(report.iter_mut())
-            .zip(active.iter_mut())
-            .zip(quiet.iter_mut())
-            .zip(spill.iter_mut())
-            .zip(pair)
-        {
-            // Proven apart since it was last looked at (below), and its history is still the
-            // cleared one (any evaluation sets the normal; a bond installed meanwhile or a
-            // restored state is seen at once).
-            if drift < *q && h.bond != BondState::Intact && is_zero(h.normal) {
-                if *on != 0 {
-                    *sp = [Vec3::ZERO; 2];
-                }
-                *on = 0;
-                continue;
+        // First the contacts that are not quiet: proven apart since they were last looked
+        // at (below), with the history still the cleared one (any evaluation sets the
+        // normal; a bond installed meanwhile or a restored state is seen at once). A quiet
+        // contact only drops its spill entry if it still carried force.
+        let mut m = 0;
+        for (k, (h, &q)) in history.iter().zip(quiet.iter()).enumerate() {
+            let is_quiet = (drift < q) & (h.bond != BondState::Intact) & is_zero(h.normal);
+            // `m <= k < live.len()`: the index is stored in every case and kept when live.
+            live[m] = k as u32;
+            m += usize::from(!is_quiet);
+            if is_quiet & (active[k] != 0) {
+                spill[k] = [Vec3::ZERO; 2];
+                active[k] = 0;
             }
+        }
+        // Then those, in contact order (the order of the block sums is unchanged: a quiet
+        // contact adds nothing).
+        for &k in &live[..m] {
+            let k = k as usize;
+            let (h, rep, on, q, sp, pair) = (
+                &mut history[k],
+                &mut report[k],
+                &mut active[k],
+                &mut quiet[k],
+                &mut spill[k],
+                &pair[k],
+            );
             let (a, b) = (pair[0] as usize, pair[1] as usize);
             let (ra, rb) = (radius[a], radius[b]);
             let branch = x[b] - x[a];
