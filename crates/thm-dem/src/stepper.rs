@@ -12,7 +12,9 @@
 //!    the contact's spill entry and stamps the particle (every stamp of a step is the same
 //!    value); a listed pair that does not touch (and is neither bonded nor sheared) costs one
 //!    distance, and is not looked at again until the drift since then could have closed its
-//!    gap; reports whether a bond broke (a boolean OR);
+//!    gap (a block sweeps its contacts in chunks of 64: it first lists, without a branch,
+//!    those that are not such quiet pairs, then evaluates the listed ones in contact order);
+//!    reports whether a bond broke (a boolean OR);
 //! 3. events: broken-bond events (the contacts are scanned only when a bond broke) and wall
 //!    forces, serially in contact order;
 //! 4. gather and integrate, one pass over the particles: every particle sums the spill
@@ -135,10 +137,6 @@ pub struct Stepper<L: ContactLaw> {
     /// A listed pair found apart (and unbonded, without shear) stays apart while the drift
     /// (see [`Drift`]) is below its entry: it is not looked at again until then.
     quiet_below: Vec<f64>,
-    /// Per contact, scratch of the contact pass: a block first lists the indices of its
-    /// contacts that are not quiet (ascending, without a branch on quietness, which follows
-    /// no pattern a branch predictor could learn) and then evaluates only those.
-    live: Vec<u32>,
 }
 
 /// How far the particles moved since the last neighbour search, as two bounds.
@@ -157,6 +155,12 @@ struct Drift {
 /// by the index, not by the thread count (the order of every sum, and so every bit, depends
 /// on this constant only), and each is a plain loop over sub-slices.
 const BLOCK: usize = 512;
+
+/// Contacts per chunk of the contact pass's two sweeps (list the contacts that are not quiet,
+/// then evaluate them): at most 256 (the list holds `u8` offsets). Only the speed depends
+/// on it.
+const LIVE_CHUNK: usize = 64;
+const _: () = assert!(LIVE_CHUNK <= 256);
 
 impl<L: ContactLaw> Stepper<L> {
     /// A stepper with empty scratch buffers.
@@ -180,7 +184,6 @@ impl<L: ContactLaw> Stepper<L> {
             touched: Vec::new(),
             stamp: 0,
             quiet_below: Vec::new(),
-            live: Vec::new(),
         }
     }
 
@@ -280,7 +283,6 @@ impl<L: ContactLaw> Stepper<L> {
         reserve_to(&mut self.active, headroom);
         reserve_to(&mut self.spill, headroom);
         reserve_to(&mut self.quiet_below, headroom);
-        reserve_to(&mut self.live, headroom);
         reserve_to(&mut self.b_entry, headroom);
 
         self.candidates.clear();
@@ -379,7 +381,6 @@ impl<L: ContactLaw> Stepper<L> {
             ..
         } = state;
         self.active.resize(contacts.len(), 0);
-        self.live.resize(contacts.len(), 0);
         self.spill.resize(contacts.len(), [Vec3::ZERO; 2]);
         self.block_force.resize(n, Vec3::ZERO);
         self.block_torque.resize(n, Vec3::ZERO);
@@ -405,7 +406,6 @@ impl<L: ContactLaw> Stepper<L> {
             report: &mut contacts.report,
             active: &mut self.active,
             quiet: &mut self.quiet_below,
-            live: &mut self.live,
             spill: &mut self.spill,
             wall_pair: &wall_contacts.pair,
             wall_history: &mut wall_contacts.history,
@@ -607,7 +607,6 @@ struct BlockSlices<'a> {
     report: &'a mut [ContactReport],
     active: &'a mut [u8],
     quiet: &'a mut [f64],
-    live: &'a mut [u32],
     spill: &'a mut [[Vec3; 2]],
     wall_pair: &'a [[u32; 2]],
     wall_history: &'a mut [ContactHistory],
@@ -624,7 +623,6 @@ impl<'a> BlockSlices<'a> {
         let (report, report_rest) = self.report.split_at_mut(c);
         let (active, active_rest) = self.active.split_at_mut(c);
         let (quiet, quiet_rest) = self.quiet.split_at_mut(c);
-        let (live, live_rest) = self.live.split_at_mut(c);
         let (spill, spill_rest) = self.spill.split_at_mut(c);
         let (wall_pair, wall_pair_rest) = self.wall_pair.split_at(w);
         let (wall_history, wall_history_rest) = self.wall_history.split_at_mut(w);
@@ -638,7 +636,6 @@ impl<'a> BlockSlices<'a> {
                 report,
                 active,
                 quiet,
-                live,
                 spill,
                 wall_pair,
                 wall_history,
@@ -652,7 +649,6 @@ impl<'a> BlockSlices<'a> {
                 report: report_rest,
                 active: active_rest,
                 quiet: quiet_rest,
-                live: live_rest,
                 spill: spill_rest,
                 wall_pair: wall_pair_rest,
                 wall_history: wall_history_rest,
@@ -729,7 +725,6 @@ impl<L: ContactLaw> BlockPass<'_, L> {
             report,
             active,
             quiet,
-            live,
             spill,
             wall_pair,
             wall_history,
@@ -748,83 +743,91 @@ impl<L: ContactLaw> BlockPass<'_, L> {
         );
         let (drift, dt) = (self.drift, self.dt);
         let (mut broke, mut count) = (false, 0);
-        // First the contacts that are not quiet: proven apart since they were last looked
-        // at (below), with the history still the cleared one (any evaluation sets the
-        // normal; a bond installed meanwhile or a restored state is seen at once). A quiet
-        // contact only drops its spill entry if it still carried force.
-        let mut m = 0;
-        for (k, (h, &q)) in history.iter().zip(quiet.iter()).enumerate() {
-            let is_quiet = (drift < q) & (h.bond != BondState::Intact) & is_zero(h.normal);
-            // `m <= k < live.len()`: the index is stored in every case and kept when live.
-            live[m] = k as u32;
-            m += usize::from(!is_quiet);
-            if is_quiet & (active[k] != 0) {
-                spill[k] = [Vec3::ZERO; 2];
-                active[k] = 0;
-            }
-        }
-        // Then those, in contact order (the order of the block sums is unchanged: a quiet
+        // Chunk by chunk of `LIVE_CHUNK` contacts (small enough that the chunk's histories
+        // are still in L1 when evaluated): first list the contacts that are not quiet, i.e.
+        // not proven apart since they were last looked at (below) with the history still
+        // the cleared one (any evaluation sets the normal; a bond installed meanwhile or a
+        // restored state is seen at once), by a store that is kept or overwritten instead of
+        // a branch (which contacts are quiet follows no pattern a branch predictor could
+        // learn); a quiet contact only drops its spill entry if it still carried force.
+        // Then evaluate those in contact order (the block sums' order is unchanged: a quiet
         // contact adds nothing).
-        for &k in &live[..m] {
-            let k = k as usize;
-            let (h, rep, on, q, sp, pair) = (
-                &mut history[k],
-                &mut report[k],
-                &mut active[k],
-                &mut quiet[k],
-                &mut spill[k],
-                &pair[k],
-            );
-            let (a, b) = (pair[0] as usize, pair[1] as usize);
-            let (ra, rb) = (radius[a], radius[b]);
-            let branch = x[b] - x[a];
-            // A listed pair that neither touches nor is bonded nor carries shear costs one
-            // squared distance. Its history's normal doubles as the flag "report already
-            // cleared": every evaluation below sets it to a unit vector.
-            if h.bond != BondState::Intact && is_zero(h.shear_force) {
-                let reach = ra + rb - h.reference_penetration;
-                let d2 = branch.norm_squared();
-                if reach <= 0.0 || d2 >= reach * reach {
-                    if !is_zero(h.normal) {
-                        h.normal = Vec3::ZERO;
-                        *rep = ContactReport::default();
-                    }
-                    // Its gap g closes by at most 2 (D(t) + D(t₀)) by step t: apart while
-                    // D(t) < g/2 − D(t₀) (less a margin far above the round-off of g and D).
-                    if reach > 0.0 {
-                        *q = 0.5 * (d2.sqrt() - reach - 1e-9 * reach) - drift;
-                    }
-                    if *on != 0 {
-                        *sp = [Vec3::ZERO; 2];
-                    }
-                    *on = 0;
-                    continue;
+        let mut live = [0_u8; LIVE_CHUNK];
+        for base in (0..pair.len()).step_by(LIVE_CHUNK) {
+            let end = (base + LIVE_CHUNK).min(pair.len());
+            let mut m = 0;
+            for k in base..end {
+                let (h, q) = (&history[k], quiet[k]);
+                let is_quiet = (drift < q) & (h.bond != BondState::Intact) & is_zero(h.normal);
+                // `m <= k - base < LIVE_CHUNK <= 256`: stored always, kept when live.
+                live[m] = (k - base) as u8;
+                m += usize::from(!is_quiet);
+                if is_quiet & (active[k] != 0) {
+                    spill[k] = [Vec3::ZERO; 2];
+                    active[k] = 0;
                 }
             }
-            *q = f64::NEG_INFINITY;
-            let kin = ContactKinematics::from_pair(branch, v[b] - v[a], w[a], w[b], ra, rb, dt);
-            let input = PairInput {
-                radius_a: ra,
-                radius_b: rb,
-                temperature: 0.5 * (t[a] + t[b]),
-            };
-            let r = self.law.respond(&input, &kin, h);
-            *rep = ContactReport::from(&r);
-            if *on != 0 && !r.active {
-                *sp = [Vec3::ZERO; 2];
-            }
-            *on = u8::from(r.active);
-            broke |= r.broke.is_some();
-            if r.active {
-                count += 1;
-                force[a - s] -= r.force_on_b;
-                torque[a - s] += r.torque_on_a;
-                if b < e {
-                    force[b - s] += r.force_on_b;
-                    torque[b - s] += r.torque_on_b;
-                } else {
-                    *sp = [r.force_on_b, r.torque_on_b];
-                    self.touched[b].store(self.stamp, Relaxed);
+            for &j in &live[..m] {
+                let k = base + usize::from(j);
+                let (h, rep, on, q, sp, pair) = (
+                    &mut history[k],
+                    &mut report[k],
+                    &mut active[k],
+                    &mut quiet[k],
+                    &mut spill[k],
+                    &pair[k],
+                );
+                let (a, b) = (pair[0] as usize, pair[1] as usize);
+                let (ra, rb) = (radius[a], radius[b]);
+                let branch = x[b] - x[a];
+                // A listed pair that neither touches nor is bonded nor carries shear costs one
+                // squared distance. Its history's normal doubles as the flag "report already
+                // cleared": every evaluation below sets it to a unit vector.
+                if h.bond != BondState::Intact && is_zero(h.shear_force) {
+                    let reach = ra + rb - h.reference_penetration;
+                    let d2 = branch.norm_squared();
+                    if reach <= 0.0 || d2 >= reach * reach {
+                        if !is_zero(h.normal) {
+                            h.normal = Vec3::ZERO;
+                            *rep = ContactReport::default();
+                        }
+                        // Its gap g closes by at most 2 (D(t) + D(t₀)) by step t: apart while
+                        // D(t) < g/2 − D(t₀) (less a margin far above the round-off of g and D).
+                        if reach > 0.0 {
+                            *q = 0.5 * (d2.sqrt() - reach - 1e-9 * reach) - drift;
+                        }
+                        if *on != 0 {
+                            *sp = [Vec3::ZERO; 2];
+                        }
+                        *on = 0;
+                        continue;
+                    }
+                }
+                *q = f64::NEG_INFINITY;
+                let kin = ContactKinematics::from_pair(branch, v[b] - v[a], w[a], w[b], ra, rb, dt);
+                let input = PairInput {
+                    radius_a: ra,
+                    radius_b: rb,
+                    temperature: 0.5 * (t[a] + t[b]),
+                };
+                let r = self.law.respond(&input, &kin, h);
+                *rep = ContactReport::from(&r);
+                if *on != 0 && !r.active {
+                    *sp = [Vec3::ZERO; 2];
+                }
+                *on = u8::from(r.active);
+                broke |= r.broke.is_some();
+                if r.active {
+                    count += 1;
+                    force[a - s] -= r.force_on_b;
+                    torque[a - s] += r.torque_on_a;
+                    if b < e {
+                        force[b - s] += r.force_on_b;
+                        torque[b - s] += r.torque_on_b;
+                    } else {
+                        *sp = [r.force_on_b, r.torque_on_b];
+                        self.touched[b].store(self.stamp, Relaxed);
+                    }
                 }
             }
         }
