@@ -117,7 +117,8 @@
 //! a particle then adds the shares of contacts from earlier blocks in contact-index order, so
 //! 1 and 2 threads give identical bits (no floating-point atomics).
 //! Neighbour search is an O(N) cell grid with a Verlet skin; a listed pair found apart is not
-//! looked at again until the particles' drift could have closed its gap, so the skin changes
+//! looked at again until the particles' drift could have closed its gap (the contact pass
+//! lists the other contacts branch-free and evaluates only those), so the skin changes
 //! the cost, never the result (a test compares the bits of a wide and a thin skin). Once the
 //! contact lists are warm a step does not allocate. Unstable runs stop with
 //! [`DemError::NonFinite`] naming the particle and the step.

@@ -12,7 +12,9 @@
 //!    the contact's spill entry and stamps the particle (every stamp of a step is the same
 //!    value); a listed pair that does not touch (and is neither bonded nor sheared) costs one
 //!    distance, and is not looked at again until the drift since then could have closed its
-//!    gap; reports whether a bond broke (a boolean OR);
+//!    gap (a block sweeps its contacts in chunks of 64: it first lists, without a branch,
+//!    those that are not such quiet pairs, then evaluates the listed ones in contact order);
+//!    reports whether a bond broke (a boolean OR);
 //! 3. events: broken-bond events (the contacts are scanned only when a bond broke) and wall
 //!    forces, serially in contact order;
 //! 4. gather and integrate, one pass over the particles: every particle sums the spill
@@ -153,6 +155,12 @@ struct Drift {
 /// by the index, not by the thread count (the order of every sum, and so every bit, depends
 /// on this constant only), and each is a plain loop over sub-slices.
 const BLOCK: usize = 512;
+
+/// Contacts per chunk of the contact pass's two sweeps (list the contacts that are not quiet,
+/// then evaluate them): at most 256 (the list holds `u8` offsets). Only the speed depends
+/// on it.
+const LIVE_CHUNK: usize = 64;
+const _: () = assert!(LIVE_CHUNK <= 256);
 
 impl<L: ContactLaw> Stepper<L> {
     /// A stepper with empty scratch buffers.
@@ -735,74 +743,91 @@ impl<L: ContactLaw> BlockPass<'_, L> {
         );
         let (drift, dt) = (self.drift, self.dt);
         let (mut broke, mut count) = (false, 0);
-        for (((((h, rep), on), q), sp), pair) in history
-            .iter_mut()
-            .zip(report.iter_mut())
-            .zip(active.iter_mut())
-            .zip(quiet.iter_mut())
-            .zip(spill.iter_mut())
-            .zip(pair)
-        {
-            // Proven apart since it was last looked at (below), and its history is still the
-            // cleared one (any evaluation sets the normal; a bond installed meanwhile or a
-            // restored state is seen at once).
-            if drift < *q && h.bond != BondState::Intact && is_zero(h.normal) {
-                if *on != 0 {
+        // Chunk by chunk of `LIVE_CHUNK` contacts (small enough that the chunk's histories
+        // are still in L1 when evaluated): first list the contacts that are not quiet, i.e.
+        // not proven apart since they were last looked at (below) with the history still
+        // the cleared one (any evaluation sets the normal; a bond installed meanwhile or a
+        // restored state is seen at once), by a store that is kept or overwritten instead of
+        // a branch (which contacts are quiet follows no pattern a branch predictor could
+        // learn); a quiet contact only drops its spill entry if it still carried force.
+        // Then evaluate those in contact order (the block sums' order is unchanged: a quiet
+        // contact adds nothing).
+        let mut live = [0_u8; LIVE_CHUNK];
+        for base in (0..pair.len()).step_by(LIVE_CHUNK) {
+            let end = (base + LIVE_CHUNK).min(pair.len());
+            let mut m = 0;
+            for k in base..end {
+                let (h, q) = (&history[k], quiet[k]);
+                let is_quiet = (drift < q) & (h.bond != BondState::Intact) & is_zero(h.normal);
+                // `m <= k - base < LIVE_CHUNK <= 256`: stored always, kept when live.
+                live[m] = (k - base) as u8;
+                m += usize::from(!is_quiet);
+                if is_quiet & (active[k] != 0) {
+                    spill[k] = [Vec3::ZERO; 2];
+                    active[k] = 0;
+                }
+            }
+            for &j in &live[..m] {
+                let k = base + usize::from(j);
+                let (h, rep, on, q, sp, pair) = (
+                    &mut history[k],
+                    &mut report[k],
+                    &mut active[k],
+                    &mut quiet[k],
+                    &mut spill[k],
+                    &pair[k],
+                );
+                let (a, b) = (pair[0] as usize, pair[1] as usize);
+                let (ra, rb) = (radius[a], radius[b]);
+                let branch = x[b] - x[a];
+                // A listed pair that neither touches nor is bonded nor carries shear costs one
+                // squared distance. Its history's normal doubles as the flag "report already
+                // cleared": every evaluation below sets it to a unit vector.
+                if h.bond != BondState::Intact && is_zero(h.shear_force) {
+                    let reach = ra + rb - h.reference_penetration;
+                    let d2 = branch.norm_squared();
+                    if reach <= 0.0 || d2 >= reach * reach {
+                        if !is_zero(h.normal) {
+                            h.normal = Vec3::ZERO;
+                            *rep = ContactReport::default();
+                        }
+                        // Its gap g closes by at most 2 (D(t) + D(t₀)) by step t: apart while
+                        // D(t) < g/2 − D(t₀) (less a margin far above the round-off of g and D).
+                        if reach > 0.0 {
+                            *q = 0.5 * (d2.sqrt() - reach - 1e-9 * reach) - drift;
+                        }
+                        if *on != 0 {
+                            *sp = [Vec3::ZERO; 2];
+                        }
+                        *on = 0;
+                        continue;
+                    }
+                }
+                *q = f64::NEG_INFINITY;
+                let kin = ContactKinematics::from_pair(branch, v[b] - v[a], w[a], w[b], ra, rb, dt);
+                let input = PairInput {
+                    radius_a: ra,
+                    radius_b: rb,
+                    temperature: 0.5 * (t[a] + t[b]),
+                };
+                let r = self.law.respond(&input, &kin, h);
+                *rep = ContactReport::from(&r);
+                if *on != 0 && !r.active {
                     *sp = [Vec3::ZERO; 2];
                 }
-                *on = 0;
-                continue;
-            }
-            let (a, b) = (pair[0] as usize, pair[1] as usize);
-            let (ra, rb) = (radius[a], radius[b]);
-            let branch = x[b] - x[a];
-            // A listed pair that neither touches nor is bonded nor carries shear costs one
-            // squared distance. Its history's normal doubles as the flag "report already
-            // cleared": every evaluation below sets it to a unit vector.
-            if h.bond != BondState::Intact && is_zero(h.shear_force) {
-                let reach = ra + rb - h.reference_penetration;
-                let d2 = branch.norm_squared();
-                if reach <= 0.0 || d2 >= reach * reach {
-                    if !is_zero(h.normal) {
-                        h.normal = Vec3::ZERO;
-                        *rep = ContactReport::default();
+                *on = u8::from(r.active);
+                broke |= r.broke.is_some();
+                if r.active {
+                    count += 1;
+                    force[a - s] -= r.force_on_b;
+                    torque[a - s] += r.torque_on_a;
+                    if b < e {
+                        force[b - s] += r.force_on_b;
+                        torque[b - s] += r.torque_on_b;
+                    } else {
+                        *sp = [r.force_on_b, r.torque_on_b];
+                        self.touched[b].store(self.stamp, Relaxed);
                     }
-                    // Its gap g closes by at most 2 (D(t) + D(t₀)) by step t: apart while
-                    // D(t) < g/2 − D(t₀) (less a margin far above the round-off of g and D).
-                    if reach > 0.0 {
-                        *q = 0.5 * (d2.sqrt() - reach - 1e-9 * reach) - drift;
-                    }
-                    if *on != 0 {
-                        *sp = [Vec3::ZERO; 2];
-                    }
-                    *on = 0;
-                    continue;
-                }
-            }
-            *q = f64::NEG_INFINITY;
-            let kin = ContactKinematics::from_pair(branch, v[b] - v[a], w[a], w[b], ra, rb, dt);
-            let input = PairInput {
-                radius_a: ra,
-                radius_b: rb,
-                temperature: 0.5 * (t[a] + t[b]),
-            };
-            let r = self.law.respond(&input, &kin, h);
-            *rep = ContactReport::from(&r);
-            if *on != 0 && !r.active {
-                *sp = [Vec3::ZERO; 2];
-            }
-            *on = u8::from(r.active);
-            broke |= r.broke.is_some();
-            if r.active {
-                count += 1;
-                force[a - s] -= r.force_on_b;
-                torque[a - s] += r.torque_on_a;
-                if b < e {
-                    force[b - s] += r.force_on_b;
-                    torque[b - s] += r.torque_on_b;
-                } else {
-                    *sp = [r.force_on_b, r.torque_on_b];
-                    self.touched[b].store(self.stamp, Relaxed);
                 }
             }
         }
