@@ -45,6 +45,14 @@ pub struct CalibrateArgs {
     /// C/T, held fixed. A-Table 1: 150/30 = 5.
     #[arg(long, default_value_t = 5.0)]
     cohesion_ratio: f64,
+    /// The pore mesher's snap tolerance (× the radius) for the permeability bars; the
+    /// default is the mesher's, 1e-6 (case a meshes with 1e-3).
+    #[arg(long, default_value_t = 1e-6)]
+    snap_tolerance: f64,
+    /// T2T faces shorter than this [m] carry at least the zero-stress S2S aperture in the
+    /// permeability bars; 0 (default): A-Eq. 9 alone (case a meshes with 1e-4).
+    #[arg(long, default_value_t = 0.0)]
+    narrow_gap_length: f64,
     /// Run only one of the two calibrations.
     #[arg(long, value_enum)]
     only: Option<Part>,
@@ -127,11 +135,13 @@ fn bar(args: &CalibrateArgs, target: f64) -> Result<(), String> {
 }
 
 fn flow(args: &CalibrateArgs) -> Result<(), String> {
-    let settings = PermeabilityCalibration {
+    let mut settings = PermeabilityCalibration {
         target_permeability: args.permeability,
         seeds: args.flow_seeds.clone(),
         ..PermeabilityCalibration::paper_a()
     };
+    settings.test.snap_tolerance = args.snap_tolerance;
+    settings.test.narrow_gap_length = args.narrow_gap_length;
     println!(
         "## T2T reduction factor: permeability of {} bar pore network(s) (seeds {:?}) = {:e} m^2",
         args.flow_seeds.len(),

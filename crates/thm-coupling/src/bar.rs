@@ -195,13 +195,7 @@ pub fn bar_params(case: BarCase, segments: u32) -> PoreScaleParams {
         },
         contact: CohesiveFrictionalParams::paper_a_table_1(),
         thermal_expansion,
-        mesh: MeshParams::new(
-            Outline::Box {
-                min: [0.0, 0.0],
-                max: [BAR_WIDTH, BAR_LENGTH],
-            },
-            segments,
-        ),
+        mesh: bar_mesh_params(case, segments),
         remesh: RemeshCriteriaParams::default(),
         flow: FlowParameters {
             // Case a: a flow step that needs more sub-steps fails, and the adaptive coupled
@@ -358,6 +352,21 @@ pub fn mean_mass_flux(state: &PoreScaleState) -> f64 {
 /// how long a released sphere takes to settle after a bond breaks (10× longer).
 pub const CASE_A_DENSITY_SCALE: f64 = 100.0;
 
+/// Snap tolerance of case a's mesher (× the smallest radius of a vertex's circles, 2–4 µm on
+/// the bar): vertices closer than that are one. Three pairwise overlapping spheres leave a
+/// curved triangle between their three chord ends; with the default 10⁻⁶ (nm) a gap of
+/// 10⁻¹⁷ m³ (sides of 60 nm) stays a pore, and as the spheres converge it closes within
+/// microseconds, faster than its fluid can leave through its S2S channels (the flow stopped
+/// case a at 0.67 s so). A gap smaller than the S2S apertures of A-Eq. 8 (0.7–3.9 µm) is
+/// part of the contact, not a pore.
+pub const CASE_A_SNAP_TOLERANCE: f64 = 1e-3;
+
+/// T2T faces of case a shorter than this \[m\] (a fortieth of the mean radius) cross a narrow
+/// gap between two spheres and carry at least the zero-stress S2S aperture of A-Eq. 8
+/// (`thm_vpn_mesh::T2tApertureLaw`): the triangles of one narrow gap then share their
+/// pressure instead of squeezing each other's liquid to 10⁸–10¹² Pa.
+pub const CASE_A_NARROW_GAP_LENGTH: f64 = 100e-6;
+
 /// Most flow sub-steps in one coupled step of case a: beyond them the coupled step is
 /// retaken shorter ([`case_a_coupling_step`]).
 pub const CASE_A_FLOW_SUBSTEPS: u32 = 20;
@@ -471,4 +480,22 @@ pub fn largest_bond_tension(state: &PoreScaleState) -> f64 {
         .filter(|(h, _)| h.bond == thm_dem::BondState::Intact)
         .map(|(_, r)| -r.normal_force)
         .fold(0.0, f64::max)
+}
+
+/// The mesher settings of `case` with `segments` points per circle: the bar's box; case a
+/// also [`CASE_A_SNAP_TOLERANCE`] and [`CASE_A_NARROW_GAP_LENGTH`] (the other cases keep the
+/// defaults, A-Eq. 9 alone).
+pub fn bar_mesh_params(case: BarCase, segments: u32) -> MeshParams {
+    let mut mesh = MeshParams::new(
+        Outline::Box {
+            min: [0.0, 0.0],
+            max: [BAR_WIDTH, BAR_LENGTH],
+        },
+        segments,
+    );
+    if case == BarCase::ContractionFree {
+        mesh.snap_tolerance = CASE_A_SNAP_TOLERANCE;
+        mesh.narrow_gap_length = CASE_A_NARROW_GAP_LENGTH;
+    }
+    mesh
 }

@@ -47,6 +47,10 @@ pub struct DarcyTest {
     pub temperature: f64,
     /// Boundary resolution of the mesher (segments per circle).
     pub segments_per_circle: u32,
+    /// The mesher's snap tolerance (`MeshParams::snap_tolerance`, default 10⁻⁶).
+    pub snap_tolerance: f64,
+    /// The mesher's narrow-gap length (`MeshParams::narrow_gap_length`; 0: A-Eq. 9 alone).
+    pub narrow_gap_length: f64,
 }
 
 impl DarcyTest {
@@ -59,6 +63,8 @@ impl DarcyTest {
             viscosity: 10.02e-4,
             temperature: 293.15,
             segments_per_circle: 32,
+            snap_tolerance: 1e-6,
+            narrow_gap_length: 0.0,
         }
     }
 
@@ -98,6 +104,8 @@ impl DarcyTest {
             self.segments_per_circle,
         );
         params.t2t_reduction_factor = gamma;
+        params.snap_tolerance = self.snap_tolerance;
+        params.narrow_gap_length = self.narrow_gap_length;
         let settings = params.validate()?;
         let packing_mesh = mesh_packing(&circles, &contacts, &settings)?;
         let net = Network::from_mesh(&packing_mesh.mesh, &self.reservoirs(), gamma)?;

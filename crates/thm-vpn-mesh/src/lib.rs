@@ -181,7 +181,8 @@ pub mod remap;
 
 pub use error::MeshError;
 pub use mesh::{
-    BoundarySide, CellKind, ChannelKind, Channels, FaceKind, NONE, PoreMesh, TopologyError,
+    BoundarySide, CellKind, ChannelKind, Channels, FaceKind, NONE, PoreMesh, T2tApertureLaw,
+    TopologyError,
 };
 pub use mesher::{
     Chords, Circle, Contact, MeshParams, MeshSettings, Outline, PackingMesh, S2sApertureParams,

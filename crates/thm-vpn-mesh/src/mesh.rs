@@ -240,15 +240,53 @@ fn reciprocal_or_zero(x: f64) -> f64 {
     std::hint::select_unpredictable(x > 0.0, 1.0 / x, 0.0)
 }
 
-/// T2T aperture of A-Eq. 9, `h = γ · e · sin ω`, for the face from `pa` to `pb` between cells
-/// whose centroids are `d` apart (`len = |d|`): with the unit face normal `n = (e_y, −e_x) / e`,
-/// `e · sin ω = e · |n · d| / |d| = |e × d| / |d|`, which needs neither the normal nor the face
-/// length (0 when the centroids coincide).
-#[inline(always)]
-fn t2t_aperture(gamma: f64, pa: [f64; 2], pb: [f64; 2], d: [f64; 2], len: f64) -> f64 {
-    let e = [pb[0] - pa[0], pb[1] - pa[1]];
-    let h = gamma * (e[0] * d[1] - e[1] * d[0]).abs() / len;
-    std::hint::select_unpredictable(len > 0.0, h, 0.0)
+/// The T2T aperture law: A-Eq. 9, `h = γ · e · sin ω`, with an optional floor for the faces
+/// that cross a narrow gap.
+///
+/// A T2T face shorter than `narrow_gap_length` joins two triangles across a gap between two
+/// circles that is narrower than that length (its end points lie on the two circles). Such a
+/// gap is, for the fluid, the same thing as a contact: A-Eq. 9 makes it nearly sealed
+/// (`γ e` with the calibrated `γ = 0.0115` is 10⁻⁸ m for a 1 µm gap), so the triangles of
+/// one gap, which the spheres' motion reshapes much more than it changes their sum, keep
+/// separate pressures, and a liquid-filled one squeezed by a neighbour's corner builds
+/// pressures of 10⁸–10¹² Pa that act on no sphere that squeezed it. With the floor, such a
+/// face carries at least `narrow_gap_aperture` (the S2S aperture of A-Eq. 8 at zero stress,
+/// the paper's aperture of two spheres that touch without load), so the triangles of a
+/// narrow gap share their pressure. `narrow_gap_length = 0` is A-Eq. 9 alone.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct T2tApertureLaw {
+    /// γ of A-Eq. 9 [-] (> 0).
+    pub reduction_factor: f64,
+    /// Faces shorter than this \[m\] (≥ 0; 0: none) get at least `narrow_gap_aperture`.
+    pub narrow_gap_length: f64,
+    /// The aperture floor of those faces \[m\] (≥ 0).
+    pub narrow_gap_aperture: f64,
+}
+
+impl From<f64> for T2tApertureLaw {
+    /// A-Eq. 9 with reduction factor γ and no narrow-gap floor.
+    fn from(reduction_factor: f64) -> Self {
+        Self {
+            reduction_factor,
+            narrow_gap_length: 0.0,
+            narrow_gap_aperture: 0.0,
+        }
+    }
+}
+
+impl T2tApertureLaw {
+    /// The aperture of the face from `pa` to `pb` between cells whose centroids are `d` apart
+    /// (`len = |d|`): with the unit face normal `n = (e_y, −e_x) / e`,
+    /// `e · sin ω = e · |n · d| / |d| = |e × d| / |d|`, which needs neither the normal nor the
+    /// face length (0 when the centroids coincide); then the narrow-gap floor.
+    #[inline(always)]
+    pub fn aperture(&self, pa: [f64; 2], pb: [f64; 2], d: [f64; 2], len: f64) -> f64 {
+        let e = [pb[0] - pa[0], pb[1] - pa[1]];
+        let eq_9 = self.reduction_factor * (e[0] * d[1] - e[1] * d[0]).abs() / len;
+        let narrow = e[0] * e[0] + e[1] * e[1] < self.narrow_gap_length * self.narrow_gap_length;
+        let h = std::hint::select_unpredictable(narrow, eq_9.max(self.narrow_gap_aperture), eq_9);
+        std::hint::select_unpredictable(len > 0.0, h, 0.0)
+    }
 }
 
 /// What the channel stage reads of the cells, faces and vertices.
@@ -258,12 +296,12 @@ struct ChannelInputs<'a> {
     vertices: &'a [[f64; 2]],
 }
 
-/// Length and, with `Some(γ)`, T2T aperture (A-Eq. 9, [`t2t_aperture`]) of the `L` channels
+/// Length and, with `Some(law)`, T2T aperture ([`T2tApertureLaw::aperture`]) of the `L` channels
 /// given by their kind, cells and face (see [`PoreMesh::update_channel_geometry`]).
 #[inline(always)]
 fn channel_lanes<const L: usize>(
     g: &ChannelInputs<'_>,
-    t2t_reduction_factor: Option<f64>,
+    t2t: Option<T2tApertureLaw>,
     kind: &[ChannelKind; L],
     cells: &[[u32; 2]; L],
     face: &[u32; L],
@@ -280,7 +318,7 @@ fn channel_lanes<const L: usize>(
     }
     let len: [f64; L] = std::array::from_fn(|k| (d[k][0] * d[k][0] + d[k][1] * d[k][1]).sqrt());
     *length = len;
-    let Some(gamma) = t2t_reduction_factor else {
+    let Some(law) = t2t else {
         return;
     };
     // The end points of the T2T lanes' faces (S2S channels have no face).
@@ -288,7 +326,7 @@ fn channel_lanes<const L: usize>(
         if kind[k] == ChannelKind::T2T {
             let [a, b] = g.face_vertices[face[k] as usize];
             let (pa, pb) = (g.vertices[a as usize], g.vertices[b as usize]);
-            aperture[k] = t2t_aperture(gamma, pa, pb, d[k], len[k]);
+            aperture[k] = law.aperture(pa, pb, d[k], len[k]);
         }
     }
 }
@@ -644,11 +682,12 @@ impl PoreMesh {
     }
 
     /// Stage "channels": the length of every channel (distance between the two cell
-    /// centroids) and, with `Some(γ)`, the T2T apertures of A-Eq. 9, one pass (after the cell
-    /// stage). The aperture is taken from the face's end points (`t2t_aperture`), not from
+    /// centroids) and, with `Some(law)`, the T2T apertures of A-Eq. 9 (and the law's narrow-gap
+    /// floor), one pass (after the cell stage). The aperture is taken from the face's end
+    /// points ([`T2tApertureLaw::aperture`]), not from
     /// its normal and length, so the pass reads the small vertex array instead of two large
     /// per-face ones.
-    pub fn update_channel_geometry(&mut self, t2t_reduction_factor: Option<f64>) {
+    pub fn update_channel_geometry(&mut self, t2t: Option<T2tApertureLaw>) {
         let ch = &mut self.channels;
         let geometry = ChannelInputs {
             centroid: &self.cell_centroid,
@@ -669,7 +708,7 @@ impl PoreMesh {
         let (aperture, aperture_tail) = ch.aperture[..n].as_chunks_mut::<LANES>();
         let groups = kind.iter().zip(cells).zip(face).zip(length).zip(aperture);
         for ((((k, c), f), l), h) in groups {
-            channel_lanes(&geometry, t2t_reduction_factor, k, c, f, l, h);
+            channel_lanes(&geometry, t2t, k, c, f, l, h);
         }
         let tail = kind_tail
             .iter()
@@ -680,7 +719,7 @@ impl PoreMesh {
         for ((((k, c), f), l), h) in tail {
             channel_lanes::<1>(
                 &geometry,
-                t2t_reduction_factor,
+                t2t,
                 std::array::from_ref(k),
                 std::array::from_ref(c),
                 std::array::from_ref(f),
@@ -723,17 +762,19 @@ impl PoreMesh {
         }
     }
 
-    /// Recomputes the aperture (A-Eq. 9) of every existing T2T channel (and every channel
-    /// length) from the current geometry, in place (channel order and indices unchanged; call
-    /// after [`Self::update_geometry`]).
-    pub fn update_t2t_apertures(&mut self, reduction_factor: f64) {
-        self.update_channel_geometry(Some(reduction_factor));
+    /// Recomputes the aperture (A-Eq. 9, `law` a γ or a [`T2tApertureLaw`]) of every existing
+    /// T2T channel (and every channel length) from the current geometry, in place (channel
+    /// order and indices unchanged; call after [`Self::update_geometry`]).
+    pub fn update_t2t_apertures(&mut self, law: impl Into<T2tApertureLaw>) {
+        self.update_channel_geometry(Some(law.into()));
     }
 
     /// Rebuilds all T2T channels (dropping existing ones of that kind) with aperture
     /// `h = γ · e · cos(90° − ω)` (A-Eq. 9), where `e` is the shared edge length and `ω` the
-    /// angle between the edge and the line joining the two centroids.
-    pub fn build_t2t_channels(&mut self, reduction_factor: f64) {
+    /// angle between the edge and the line joining the two centroids (`law` a γ or a
+    /// [`T2tApertureLaw`] with its narrow-gap floor).
+    pub fn build_t2t_channels(&mut self, law: impl Into<T2tApertureLaw>) {
+        let law = law.into();
         let keep: Vec<usize> = (0..self.channels.len())
             .filter(|&i| self.channels.kind[i] != ChannelKind::T2T)
             .collect();
@@ -765,9 +806,7 @@ impl PoreMesh {
             self.channels.kind.push(ChannelKind::T2T);
             self.channels.cells.push([c0, c1]);
             self.channels.length.push(length);
-            self.channels
-                .aperture
-                .push(t2t_aperture(reduction_factor, pa, pb, d, length));
+            self.channels.aperture.push(law.aperture(pa, pb, d, length));
             self.channels.face.push(f as u32);
             self.channels.contact.push(NONE);
         }

@@ -30,7 +30,7 @@ use serde::{Deserialize, Serialize};
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 
 use crate::error::MeshError;
-use crate::mesh::{CellKind, ChannelKind, NONE, PoreMesh};
+use crate::mesh::{CellKind, ChannelKind, NONE, PoreMesh, T2tApertureLaw};
 use crate::motion::{VertexAnchors, VertexConstraint};
 
 /// A sphere projected on the mid-plane.
@@ -130,6 +130,11 @@ pub struct MeshParams {
     /// side are put on it, `r` being the radius of the smallest circle the vertices belong to,
     /// at most the mean radius [-] (default 1e-6).
     pub snap_tolerance: f64,
+    /// T2T faces shorter than this \[m\] cross a gap between two circles narrower than it and
+    /// carry at least the S2S aperture of A-Eq. 8 at zero stress, `β h₀` (see
+    /// [`crate::T2tApertureLaw`]); 0 (the default) is A-Eq. 9 alone.
+    #[serde(default)]
+    pub narrow_gap_length: f64,
 }
 
 impl MeshParams {
@@ -142,6 +147,7 @@ impl MeshParams {
             t2t_reduction_factor: 0.0115,
             s2s: S2sApertureParams::default(),
             snap_tolerance: 1e-6,
+            narrow_gap_length: 0.0,
         }
     }
 
@@ -200,6 +206,12 @@ impl MeshParams {
             self.snap_tolerance,
             (0.0..=1e-3).contains(&self.snap_tolerance),
         )?;
+        p(
+            "narrow_gap_length",
+            ">= 0 m and finite",
+            self.narrow_gap_length,
+            self.narrow_gap_length >= 0.0,
+        )?;
         Ok(MeshSettings { p: *self })
     }
 }
@@ -253,9 +265,22 @@ pub struct PackingMesh {
     /// The T2T reduction factor γ the mesh was built with (A-Eq. 9), used to refresh the T2T
     /// apertures as the mesh moves.
     pub t2t_reduction_factor: f64,
+    /// The narrow-gap floor of the T2T apertures: faces shorter than `[0]` \[m\] carry at
+    /// least `[1]` \[m\] ([`crate::T2tApertureLaw`]; `[0, 0]`: A-Eq. 9 alone).
+    #[serde(default)]
+    pub narrow_gap: [f64; 2],
 }
 
 impl PackingMesh {
+    /// The law the T2T apertures follow (A-Eq. 9 and the narrow-gap floor).
+    pub fn t2t_law(&self) -> T2tApertureLaw {
+        T2tApertureLaw {
+            reduction_factor: self.t2t_reduction_factor,
+            narrow_gap_length: self.narrow_gap[0],
+            narrow_gap_aperture: self.narrow_gap[1],
+        }
+    }
+
     /// Solid cells of circle `i`.
     pub fn cells_of_circle(&self, i: usize) -> &[u32] {
         let a = self.circle_cell_offsets[i] as usize;
@@ -1556,6 +1581,18 @@ pub fn mesh_packing(
         1e-12 * scale,
         prm.t2t_reduction_factor,
     )?;
+    let narrow_gap = if prm.narrow_gap_length > 0.0 {
+        [prm.narrow_gap_length, prm.s2s.aperture(0.0)]
+    } else {
+        [0.0; 2]
+    };
+    if prm.narrow_gap_length > 0.0 {
+        mesh.update_t2t_apertures(T2tApertureLaw {
+            reduction_factor: prm.t2t_reduction_factor,
+            narrow_gap_length: narrow_gap[0],
+            narrow_gap_aperture: narrow_gap[1],
+        });
+    }
 
     // Chords: the polygon edge of circle a on line Pair(a, b).
     let mut chords = Chords::default();
@@ -1698,5 +1735,6 @@ pub fn mesh_packing(
         circle_cells,
         cell_circle,
         t2t_reduction_factor: prm.t2t_reduction_factor,
+        narrow_gap,
     })
 }

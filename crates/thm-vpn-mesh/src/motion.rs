@@ -483,8 +483,7 @@ impl MeshMotion {
         pm.mesh
             .update_cell_geometry_and_rate(&self.velocity, thickness, &mut self.volume_rate);
         pm.mesh.update_face_geometry();
-        pm.mesh
-            .update_channel_geometry(Some(pm.t2t_reduction_factor));
+        pm.mesh.update_channel_geometry(Some(pm.t2t_law()));
         Ok(())
     }
 

@@ -139,6 +139,80 @@ fn t2t_apertures_follow_the_motion() {
     assert!(changed > 0);
 }
 
+/// The narrow-gap floor (`MeshParams::narrow_gap_length`): on the bar, a T2T face shorter
+/// than the length carries `max(A-Eq. 9, β h₀)`, every other channel is the mesh without the
+/// floor to the bit; after a move the apertures are still the law's on the moved faces.
+#[test]
+fn narrow_gaps_carry_the_zero_stress_s2s_aperture() {
+    let spec = PackingSpec::paper_bar(3);
+    let cs = random_packing(&spec);
+    let mesh = |narrow_gap_length: f64| {
+        let mut p = MeshParams::new(
+            Outline::Box {
+                min: spec.box_min,
+                max: spec.box_max,
+            },
+            32,
+        );
+        p.narrow_gap_length = narrow_gap_length;
+        mesh_packing(&cs, &overlap_contacts(&cs, 1e7), &p.validate().unwrap()).unwrap()
+    };
+    let (plain, mut pm) = (mesh(0.0), mesh(100e-6));
+    let floor = S2sApertureParams::default().aperture(0.0);
+    assert_eq!(pm.narrow_gap, [100e-6, floor]);
+    assert_eq!(plain.narrow_gap, [0.0, 0.0]);
+    assert_eq!(pm.mesh.channels.kind, plain.mesh.channels.kind);
+    let face_length = |m: &PoreMesh, c: usize| {
+        let [a, b] = m.face_vertices[m.channels.face[c] as usize];
+        let (pa, pb) = (m.vertices[a as usize], m.vertices[b as usize]);
+        ((pb[0] - pa[0]).powi(2) + (pb[1] - pa[1]).powi(2)).sqrt()
+    };
+    let mut raised = 0;
+    for c in 0..pm.mesh.channels.len() {
+        let (h, h_plain) = (
+            pm.mesh.channels.aperture[c],
+            plain.mesh.channels.aperture[c],
+        );
+        if pm.mesh.channels.kind[c] == ChannelKind::T2T && face_length(&pm.mesh, c) < 100e-6 {
+            assert_eq!(h, h_plain.max(floor), "channel {c}");
+            raised += usize::from(h_plain < floor);
+        } else {
+            assert_eq!(h, h_plain, "channel {c}");
+        }
+    }
+    assert!(raised >= 1, "{raised} narrow faces raised");
+    let r = rates(cs.len());
+    MeshMotion::new()
+        .update(&mut pm, &State::at(&cs, &r, 2.0).motion())
+        .unwrap();
+    let mut rebuilt = pm.mesh.clone();
+    rebuilt.build_t2t_channels(pm.t2t_law());
+    let by_face: std::collections::HashMap<u32, f64> = (0..rebuilt.channels.len())
+        .filter(|&c| rebuilt.channels.kind[c] == ChannelKind::T2T)
+        .map(|c| (rebuilt.channels.face[c], rebuilt.channels.aperture[c]))
+        .collect();
+    for c in 0..pm.mesh.channels.len() {
+        if pm.mesh.channels.kind[c] == ChannelKind::T2T {
+            assert_eq!(
+                pm.mesh.channels.aperture[c],
+                by_face[&pm.mesh.channels.face[c]]
+            );
+        }
+    }
+    let bad = MeshParams {
+        narrow_gap_length: -1e-6,
+        ..MeshParams::new(
+            Outline::Box {
+                min: [0.0; 2],
+                max: [1.0; 2],
+            },
+            16,
+        )
+    };
+    let e = bad.validate().unwrap_err().to_string();
+    assert!(e.contains("narrow_gap_length"), "{e}");
+}
+
 /// The box does not move: the cell volume rates sum to zero to round-off, and the total
 /// volume stays the box volume.
 #[test]

@@ -23,7 +23,7 @@ use crate::run::error::{ConfigError, RunError};
 use crate::run::profiles::Profile;
 use crate::run::scenario::{FrameSink, Scenario};
 use crate::run::summary::SummaryRow;
-use crate::run::units::{Pressure, Quantity, Time};
+use crate::run::units::{Length, Pressure, Quantity, Time};
 
 /// Which case of the paper.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -80,6 +80,14 @@ pub struct BarParams {
     /// default) or `cell_corners` (`thm_coupling::pore_scale::pore_forces`).
     #[serde(default)]
     pub pressure_force: Option<PressureForce>,
+    /// Snap tolerance of the mesher, × the radius (case a only; in 0 … 1e-3; default
+    /// `thm_coupling::bar::CASE_A_SNAP_TOLERANCE`).
+    #[serde(default)]
+    pub snap_tolerance: Option<f64>,
+    /// T2T faces shorter than this carry at least the zero-stress S2S aperture (case a only;
+    /// 0 m: A-Eq. 9 alone; default `thm_coupling::bar::CASE_A_NARROW_GAP_LENGTH`).
+    #[serde(default)]
+    pub narrow_gap_length: Option<Quantity<Length>>,
 }
 
 /// `[bar.coupling_step]`: see `thm_coupling::pore_scale::CouplingStepParams`.
@@ -310,7 +318,7 @@ impl Scenario for PoreScaleBar {
     const KIND: &'static str = "pore_scale_bar";
     // 2: the state carries each sphere's reference solid area (heat capacity of its mass).
     // 3: the coupled state inside `BarRun` with the run's records.
-    const STATE_VERSION: u32 = 3;
+    const STATE_VERSION: u32 = 4;
     type Params = Params;
     type State = BarRun;
 
@@ -366,6 +374,8 @@ impl Scenario for PoreScaleBar {
             ),
             ("bar.coupling_step", b.coupling_step.is_some()),
             ("bar.pressure_force", b.pressure_force.is_some()),
+            ("bar.snap_tolerance", b.snap_tolerance.is_some()),
+            ("bar.narrow_gap_length", b.narrow_gap_length.is_some()),
         ] {
             if given && !free {
                 return Err(ConfigError::new(
@@ -386,6 +396,18 @@ impl Scenario for PoreScaleBar {
         }
         if let Some(f) = b.pressure_force {
             params.pressure_force = f;
+        }
+        if let Some(t) = b.snap_tolerance {
+            if !(0.0..=1e-3).contains(&t) {
+                return Err(ConfigError::new(
+                    "bar.snap_tolerance",
+                    format!("must be in 0 … 1e-3 (× the radius), got {t}"),
+                ));
+            }
+            params.mesh.snap_tolerance = t;
+        }
+        if let Some(l) = &b.narrow_gap_length {
+            params.mesh.narrow_gap_length = l.within("bar.narrow_gap_length", 0.0, 1e-3)?;
         }
         let density_scale = b.density_scale.unwrap_or(CASE_A_DENSITY_SCALE);
         let mut rule = None;
