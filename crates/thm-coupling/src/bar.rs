@@ -214,7 +214,15 @@ pub fn bar_params(case: BarCase, segments: u32) -> PoreScaleParams {
         boundary_reduction_factor: 0.0115,
         heat,
         heat_scheme: HeatScheme::Implicit,
-        pressure_force: PressureForce::WallFaces,
+        // Case a: the pore pressures push through the cell corners with the pores' undrained
+        // springs integrated implicitly (`pore_scale::pore_forces`); with A-Eqs. 52–53 the
+        // staggered coupling squeezes liquid-filled pores to 10¹¹ Pa and the run stops at
+        // 2.05 s (docs/cases/bar_contraction_free.md). A held skeleton feels no force.
+        pressure_force: if case == BarCase::ContractionFree {
+            PressureForce::CellCorners
+        } else {
+            PressureForce::WallFaces
+        },
     }
 }
 
@@ -351,6 +359,11 @@ pub fn mean_mass_flux(state: &PoreScaleState) -> f64 {
 /// cooling, so the skeleton still follows the temperature quasi-statically; what it changes is
 /// how long a released sphere takes to settle after a bond breaks (10× longer).
 pub const CASE_A_DENSITY_SCALE: f64 = 100.0;
+
+/// The bond tensile strength of case a \[Pa\]: `thm calibrate`'s T for a mean tensile strength of
+/// 8.8 MPa on the seeded bar packings (A-Sect. 3.1; A-Table 1's 30 MPa gives 5.47 MPa there),
+/// with C = 5 T as in A-Table 1 (checked by `dem/uniaxial_tension_bar`).
+pub const CASE_A_BOND_TENSILE_STRENGTH: f64 = 48.29e6;
 
 /// Snap tolerance of case a's mesher (× the smallest radius of a vertex's circles, 2–4 µm on
 /// the bar): vertices closer than that are one. Three pairwise overlapping spheres leave a

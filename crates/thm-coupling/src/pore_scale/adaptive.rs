@@ -98,6 +98,11 @@ pub struct AdvanceReport {
     pub boundary_energy: f64,
     /// Remeshes in the accepted steps.
     pub remeshes: u64,
+    /// Wall seconds of each stage over every step tried (accepted, and rejected for moving a
+    /// sphere too far; a step that failed in a stage is not counted).
+    pub stage_seconds: super::StageSeconds,
+    /// Wall seconds of saving the state before each step and restoring it after a rejection.
+    pub retake_seconds: f64,
 }
 
 /// The sphere that moved furthest between `before` and `after`, and how far \[m\].
@@ -163,8 +168,13 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             // The last step takes what is left (within round-off of the tried length).
             let last = tried >= left * (1.0 - 1e-9);
             let h = if last { left } else { tried };
+            let clock = std::time::Instant::now();
             let saved = state.clone();
+            report.retake_seconds += clock.elapsed().as_secs_f64();
             let outcome = self.step(state, h);
+            if let Ok(r) = &outcome {
+                report.stage_seconds.accumulate(&r.stage_seconds);
+            }
             let moved = largest_displacement(&saved, state);
             match outcome {
                 Ok(r) if moved.1 <= limit => {
@@ -177,8 +187,10 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
                     state.coupling_step = (tried * p.growth).min(p.max_step);
                 }
                 outcome => {
+                    let clock = std::time::Instant::now();
                     *state = saved;
                     self.rebuild(state)?;
+                    report.retake_seconds += clock.elapsed().as_secs_f64();
                     if h <= p.min_step {
                         outcome?;
                         return Err(CouplingError::CouplingStepTooSmall {

@@ -125,6 +125,30 @@ pub struct StageSeconds {
     pub radii_and_remesh: f64,
 }
 
+impl StageSeconds {
+    /// Adds `other`'s seconds stage by stage.
+    pub fn accumulate(&mut self, other: &StageSeconds) {
+        self.fluid_forces += other.fluid_forces;
+        self.dem += other.dem;
+        self.mesh += other.mesh;
+        self.flow += other.flow;
+        self.heat += other.heat;
+        self.radii_and_remesh += other.radii_and_remesh;
+    }
+
+    /// `(name, seconds)` of every stage, in stage order.
+    pub fn named(&self) -> [(&'static str, f64); 6] {
+        [
+            ("fluid_forces", self.fluid_forces),
+            ("dem", self.dem),
+            ("mesh", self.mesh),
+            ("flow", self.flow),
+            ("heat", self.heat),
+            ("radii_and_remesh", self.radii_and_remesh),
+        ]
+    }
+}
+
 /// The coupled stepper: the composed solvers' scratch and what is derived from the state's
 /// mesh (the flow network, the heat model and geometry). It holds no evolving state: built
 /// afresh from a restored [`PoreScaleState`], it continues a run bit for bit.
@@ -278,7 +302,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             &mut self.force,
             &mut state.dem,
         )?;
-        let mut dt_dem = self.config.params.dem.time_step;
+        let dt_dem = self.config.params.dem.time_step;
         if corners {
             self.undrained.begin(
                 &state.mesh,
@@ -289,17 +313,6 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
                 &self.force,
             )?;
             self.undrained.add_start_forces(&mut self.force);
-            dt_dem =
-                pore_forces::resolving_substep(dt_dem, self.undrained.stable_substep(&state.dem))
-                    .map_err(|value| CouplingError::Unphysical {
-                    stage: "fluid forces",
-                    quantity: "DEM sub-step resolving the pores [s]",
-                    place: "packing",
-                    index: 0,
-                    value,
-                    step: state.flow.step,
-                    why: "below Δt_D / 2^20",
-                })?;
         }
         let (h, n) = dem_substeps(dt_dem, dt);
         lap(&mut seconds.fluid_forces);

@@ -61,8 +61,9 @@ pub enum PressureForce {
     #[default]
     WallFaces,
     /// `P_i ∂V_i/∂c_s` through every cell corner anchored to a sphere, with each pore's
-    /// undrained response updated before every DEM sub-step (`pore_forces` module docs).
-    /// Used only with a free skeleton; the S2S shear of A-Eq. 54 is unchanged.
+    /// undrained response updated before every DEM sub-step and its spring integrated
+    /// implicitly after it (`pore_forces` module docs). Used only with a free skeleton; the
+    /// S2S shear of A-Eq. 54 is unchanged.
     CellCorners,
 }
 

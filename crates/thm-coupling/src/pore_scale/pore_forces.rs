@@ -35,12 +35,17 @@
 //! pore of 8·10⁻¹² m³ moved by 0.2 µm), and the DEM then closes it further than the flow
 //! allows.
 //!
-//! The explicit DEM must resolve this stiffness. [`UndrainedPores::stable_substep`] gives the
-//! sub-step at which the fluid alone keeps `ω h ≤ 1/2` for every free sphere (a Gershgorin
-//! bound, `h² Σ_i k_i |g_is| Σ_t |g_it| ≤ m_s / 4` with the tangent `k_i`), and every
-//! [`UndrainedPores::apply`] checks the bound `ω h ≤ 1` with the present tangents: a pore that
-//! stiffens past it stops the DEM stage with an error (the adaptive coupled step then retakes
-//! the step shorter).
+//! An explicit DEM would have to resolve this stiffness: a liquid-filled pore of 10⁻¹² m³
+//! pushes its spheres with `k = K g²/V` of order 10¹¹ N/m, `ω Δt_D` of 4 at case a's scaled
+//! DEM step, and without gas the stiffness grows without bound. (The first form of this
+//! option halved the DEM sub-step to keep `ω h ≤ 1/2` and stopped a step whose pores stiffened
+//! past `ω h = 1`; case a then stopped at 0.41 s, and with the narrow-gap apertures at 1.63 s,
+//! each time at a sphere whose pores needed sub-steps far below 10⁻⁷ s.) The pores' springs
+//! are therefore integrated implicitly ([`UndrainedPores::implicit_correction`]): after each
+//! explicit DEM sub-step the velocities solve `(M + h² K) v = M v*`, backward Euler in the
+//! spring forces linearised about the sub-step's start (`K = Σ_i k_i g_i g_iᵀ` with the
+//! tangent `k_i`), which is stable at any stiffness; the tangent is taken again at every
+//! sub-step, so the hyperbolic stiffening of a pore losing its gas is followed.
 
 use thm_dem::{DemState, Vec3};
 use thm_vpn_flow::{FlowState, Phase, PoreFluid};
@@ -163,8 +168,6 @@ impl PoreVolumeGradient {
 #[derive(Debug, Clone, Default)]
 pub struct UndrainedPores {
     gradient: PoreVolumeGradient,
-    /// Per gradient entry `|g_is| Σ_t |g_it|` \[m⁴\].
-    coupling: Vec<f64>,
     start_pressure: Vec<f64>,
     liquid_volume: Vec<f64>,
     gas_volume: Vec<f64>,
@@ -174,23 +177,19 @@ pub struct UndrainedPores {
     other_force: Vec<[f64; 2]>,
     pressure: Vec<f64>,
     tangent: Vec<f64>,
-    demand: Vec<f64>,
     force: Vec<[f64; 2]>,
+    /// Conjugate-gradient vectors of [`UndrainedPores::implicit_correction`] (per sphere:
+    /// the explicit velocities, the correction, residual, preconditioned residual, direction
+    /// and product).
+    cg: [Vec<[f64; 2]>; 6],
+    /// Its Jacobi preconditioner (per sphere and axis).
+    cg_diagonal: Vec<[f64; 2]>,
 }
 
-/// The DEM sub-step for a coupled step: `dt_dem` halved until it is below `stable` (so that
-/// the DEM stepper is rebuilt only when the halvings change), or `Err(stable)` past 20
-/// halvings.
-pub fn resolving_substep(dt_dem: f64, stable: f64) -> Result<f64, f64> {
-    let mut h = dt_dem;
-    for _ in 0..=20 {
-        if h <= stable {
-            return Ok(h);
-        }
-        h *= 0.5;
-    }
-    Err(stable)
-}
+/// Relative residual at which the implicit correction's conjugate gradients stop.
+const IMPLICIT_TOLERANCE: f64 = 1e-12;
+/// Most conjugate-gradient iterations of one implicit correction.
+const IMPLICIT_ITERATIONS: usize = 500;
 
 /// Pressure and tangent stiffness `−dP/dV` of the two-phase spring of one pore (module docs)
 /// for the volume change `dv`.
@@ -292,13 +291,6 @@ impl UndrainedPores {
             .extend(p.position.iter().map(|x| [x.x, x.y]));
         self.other_force.clear();
         self.other_force.extend_from_slice(other_force);
-        self.coupling.clear();
-        for i in 0..np {
-            let (_, g) = self.gradient.row(i);
-            let row: f64 = g.iter().map(|g| g[0].hypot(g[1])).sum();
-            self.coupling
-                .extend(g.iter().map(|g| g[0].hypot(g[1]) * row));
-        }
         self.pressure.clear();
         self.tangent.clear();
         for i in 0..np {
@@ -306,7 +298,6 @@ impl UndrainedPores {
             self.pressure.push(p);
             self.tangent.push(k);
         }
-        self.demand.resize(p.len(), 0.0);
         self.force.resize(p.len(), [0.0; 2]);
         Ok(())
     }
@@ -322,35 +313,9 @@ impl UndrainedPores {
         )
     }
 
-    /// `Σ_i k_i |g_is| Σ_t |g_it|` for every sphere with the present tangents, into `demand`.
-    fn fill_demand(&mut self) {
-        self.demand.fill(0.0);
-        for i in 0..self.gradient.n_pores() {
-            let (s, _) = self.gradient.row(i);
-            let start = self.gradient.start[i] as usize;
-            for (e, &s) in s.iter().enumerate() {
-                self.demand[s as usize] += self.tangent[i] * self.coupling[start + e];
-            }
-        }
-    }
-
-    /// The longest DEM sub-step at which the pores' stiffness at the step's start keeps
-    /// `ω h ≤ 1/2` for every free sphere of `dem` (infinite where no pore is stiff).
-    pub fn stable_substep(&mut self, dem: &DemState) -> f64 {
-        self.fill_demand();
-        let p = &dem.particles;
-        let mut h = f64::INFINITY;
-        for (s, &d) in self.demand.iter().enumerate() {
-            if d > 0.0 && !p.fixed[s] {
-                h = h.min(0.5 * (p.mass[s] / d).sqrt());
-            }
-        }
-        h
-    }
-
-    /// Sets the spheres' external forces from the pressures their present centres give, and
-    /// checks that the DEM sub-step `h` still resolves the pores' stiffness (`ω h ≤ 1`).
-    pub fn apply(&mut self, dem: &mut DemState, h: f64, step: u64) -> Result<(), CouplingError> {
+    /// Sets the spheres' external forces from the pressures their present centres give (and
+    /// the tangents [`UndrainedPores::implicit_correction`] uses).
+    pub fn apply(&mut self, dem: &mut DemState, step: u64) -> Result<(), CouplingError> {
         let p = &mut dem.particles;
         for i in 0..self.gradient.n_pores() {
             let (s, g) = self.gradient.row(i);
@@ -368,20 +333,7 @@ impl UndrainedPores {
         for (out, f) in p.external_force.iter_mut().zip(&self.force) {
             *out = Vec3::new(f[0], f[1], 0.0);
         }
-        self.fill_demand();
-        let p = &dem.particles;
-        for (s, &d) in self.demand.iter().enumerate() {
-            if !p.fixed[s] && d * h * h > p.mass[s] {
-                return Err(CouplingError::Unphysical {
-                    stage: "DEM",
-                    quantity: "undrained pore stiffness (ω Δt_D)",
-                    place: "sphere",
-                    index: s,
-                    value: (d / p.mass[s]).sqrt() * h,
-                    step,
-                    why: "above 1: the DEM sub-step no longer resolves the pores around it",
-                });
-            }
+        for s in 0..self.force.len() {
             if !(self.force[s][0].is_finite() && self.force[s][1].is_finite()) {
                 return Err(CouplingError::Unphysical {
                     stage: "DEM",
@@ -389,6 +341,179 @@ impl UndrainedPores {
                     place: "sphere",
                     index: s,
                     value: self.force[s][0] + self.force[s][1],
+                    step,
+                    why: "not finite",
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// `out = K x` with `K = Σ_i k_i g_i g_iᵀ` over the free spheres (`k_i` the tangents of the
+    /// last [`UndrainedPores::apply`]).
+    fn product(
+        gradient: &PoreVolumeGradient,
+        tangent: &[f64],
+        fixed: &[bool],
+        x: &[[f64; 2]],
+        out: &mut [[f64; 2]],
+    ) {
+        out.fill([0.0; 2]);
+        for (i, &k) in tangent.iter().enumerate().take(gradient.n_pores()) {
+            if k == 0.0 {
+                continue;
+            }
+            let (s, g) = gradient.row(i);
+            let mut d = 0.0;
+            for (&s, g) in s.iter().zip(g) {
+                if !fixed[s as usize] {
+                    let x = x[s as usize];
+                    d += g[0] * x[0] + g[1] * x[1];
+                }
+            }
+            let kd = k * d;
+            for (&s, g) in s.iter().zip(g) {
+                if !fixed[s as usize] {
+                    let o = &mut out[s as usize];
+                    o[0] += kd * g[0];
+                    o[1] += kd * g[1];
+                }
+            }
+        }
+    }
+
+    /// After a DEM step of `h` taken with the forces of [`UndrainedPores::apply`]: makes the
+    /// pores' springs implicit. The explicit step gave `v*` with the pore forces of the step's
+    /// start; backward Euler in the linearised spring forces,
+    /// `F(x + h v) ≈ F(x) − h K v` with `K = Σ_i k_i g_i g_iᵀ`, gives `(M + h² K) v = M v*`.
+    /// The correction `δ = v* − v` solves `(M + h² K) δ = h² K v*` (conjugate gradients,
+    /// Jacobi-preconditioned, `M + h² K` symmetric positive definite over the free spheres),
+    /// and the spheres take `v = v* − δ`, `x = x* − h δ`. Unconditionally stable for the
+    /// linearised springs, so the sub-step need not resolve the stiffness of a pore that is
+    /// nearly out of gas.
+    pub fn implicit_correction(
+        &mut self,
+        dem: &mut DemState,
+        h: f64,
+        step: u64,
+    ) -> Result<(), CouplingError> {
+        let n = dem.particles.len();
+        let h2 = h * h;
+        for v in &mut self.cg {
+            v.clear();
+            v.resize(n, [0.0; 2]);
+        }
+        self.cg_diagonal.clear();
+        self.cg_diagonal.resize(n, [0.0; 2]);
+        let p = &dem.particles;
+        let [velocity, delta, r, z, d, q] = &mut self.cg;
+        // Right-hand side h² K v* into r (δ = 0 to start, so the residual is the rhs).
+        for (out, v) in velocity.iter_mut().zip(&p.velocity) {
+            *out = [v.x, v.y];
+        }
+        Self::product(&self.gradient, &self.tangent, &p.fixed, velocity, r);
+        let mut rhs_norm = 0.0;
+        for r in r.iter_mut() {
+            r[0] *= h2;
+            r[1] *= h2;
+            rhs_norm += r[0] * r[0] + r[1] * r[1];
+        }
+        if rhs_norm == 0.0 {
+            return Ok(());
+        }
+        for (s, diag) in self.cg_diagonal.iter_mut().enumerate() {
+            *diag = [p.mass[s]; 2];
+        }
+        for i in 0..self.gradient.n_pores() {
+            let k = self.tangent[i];
+            let (s, g) = self.gradient.row(i);
+            for (&s, g) in s.iter().zip(g) {
+                let diag = &mut self.cg_diagonal[s as usize];
+                diag[0] += h2 * k * g[0] * g[0];
+                diag[1] += h2 * k * g[1] * g[1];
+            }
+        }
+        let precondition = |r: &[[f64; 2]], z: &mut [[f64; 2]], diag: &[[f64; 2]]| {
+            for ((z, r), d) in z.iter_mut().zip(r).zip(diag) {
+                *z = [r[0] / d[0], r[1] / d[1]];
+            }
+        };
+        let dot = |a: &[[f64; 2]], b: &[[f64; 2]]| -> f64 {
+            a.iter()
+                .zip(b)
+                .map(|(a, b)| a[0] * b[0] + a[1] * b[1])
+                .sum()
+        };
+        precondition(r, z, &self.cg_diagonal);
+        d.copy_from_slice(z);
+        let mut rz = dot(r, z);
+        let mut converged = false;
+        for _ in 0..IMPLICIT_ITERATIONS {
+            Self::product(&self.gradient, &self.tangent, &p.fixed, d, q);
+            for (s, (q, d)) in q.iter_mut().zip(d.iter()).enumerate() {
+                let m = if p.fixed[s] { 0.0 } else { p.mass[s] };
+                q[0] = m * d[0] + h2 * q[0];
+                q[1] = m * d[1] + h2 * q[1];
+            }
+            let dq = dot(d, q);
+            if dq.is_nan() || dq <= 0.0 {
+                converged = rz == 0.0;
+                break;
+            }
+            let alpha = rz / dq;
+            let mut r_norm = 0.0;
+            for (((delta, r), d), q) in delta
+                .iter_mut()
+                .zip(r.iter_mut())
+                .zip(d.iter())
+                .zip(q.iter())
+            {
+                delta[0] += alpha * d[0];
+                delta[1] += alpha * d[1];
+                r[0] -= alpha * q[0];
+                r[1] -= alpha * q[1];
+                r_norm += r[0] * r[0] + r[1] * r[1];
+            }
+            if r_norm <= IMPLICIT_TOLERANCE * IMPLICIT_TOLERANCE * rhs_norm {
+                converged = true;
+                break;
+            }
+            precondition(r, z, &self.cg_diagonal);
+            let rz_new = dot(r, z);
+            let beta = rz_new / rz;
+            rz = rz_new;
+            for (d, z) in d.iter_mut().zip(z.iter()) {
+                d[0] = z[0] + beta * d[0];
+                d[1] = z[1] + beta * d[1];
+            }
+        }
+        if !converged {
+            return Err(CouplingError::Unphysical {
+                stage: "DEM",
+                quantity: "implicit pore spring residual",
+                place: "packing",
+                index: 0,
+                value: (dot(r, r) / rhs_norm).sqrt(),
+                step,
+                why: "the conjugate gradients did not converge",
+            });
+        }
+        let p = &mut dem.particles;
+        for (s, delta) in delta.iter().enumerate() {
+            if p.fixed[s] {
+                continue;
+            }
+            p.velocity[s].x -= delta[0];
+            p.velocity[s].y -= delta[1];
+            p.position[s].x -= h * delta[0];
+            p.position[s].y -= h * delta[1];
+            if !(p.position[s].x.is_finite() && p.position[s].y.is_finite()) {
+                return Err(CouplingError::Unphysical {
+                    stage: "DEM",
+                    quantity: "implicit pore spring correction",
+                    place: "sphere",
+                    index: s,
+                    value: delta[0] + delta[1],
                     step,
                     why: "not finite",
                 });

@@ -64,7 +64,8 @@ pub fn fluid_forces(
 /// Stage 2: `n` DEM steps (the stepper's Δt_D each), and the turn of every sphere about z
 /// accumulated into `rotation` for the mesh motion. With `undrained`, the pore pressure
 /// forces follow each pore's undrained response before every step
-/// ([`super::pore_forces::UndrainedPores::apply`]).
+/// ([`super::pore_forces::UndrainedPores::apply`]) and the pores' springs are made implicit
+/// after it ([`super::pore_forces::UndrainedPores::implicit_correction`]).
 pub fn dem_steps(
     stepper: &mut Stepper<CohesiveFrictional>,
     dt_dem: f64,
@@ -76,9 +77,12 @@ pub fn dem_steps(
 ) -> Result<(), CouplingError> {
     for _ in 0..n {
         if let Some(u) = undrained.as_deref_mut() {
-            u.apply(dem, dt_dem, step)?;
+            u.apply(dem, step)?;
         }
         stepper.step(dem).map_err(CouplingError::Dem)?;
+        if let Some(u) = undrained.as_deref_mut() {
+            u.implicit_correction(dem, dt_dem, step)?;
+        }
         for (a, w) in rotation.iter_mut().zip(&dem.particles.angular_velocity) {
             *a += w.z * dt_dem;
         }

@@ -13,7 +13,7 @@ use thm_coupling::bar::{
 };
 use thm_coupling::pore_scale::{
     CouplingError, CouplingStepParams, CouplingStepRule, PoreScaleParams, PoreScaleState,
-    PoreScaleStepper, PressureForce,
+    PoreScaleStepper, PressureForce, StageSeconds,
 };
 use thm_coupling::verification::{WaterAir, water_air};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
@@ -142,6 +142,9 @@ pub struct PoreScaleBar {
     centre: Vec<usize>,
     /// The equivalent bar of A-Eq. 63 on the initial state (the profiles' reference).
     equivalent: EquivalentMedium,
+    /// Wall seconds of the coupled step's stages in this invocation (case a: with the retakes'
+    /// saving and restoring last).
+    stage_seconds: (StageSeconds, f64),
     // Frame buffers.
     cell_pressure: Vec<f64>,
     cell_fraction: Vec<f64>,
@@ -202,7 +205,7 @@ impl PoreScaleBar {
         let [t_min, t_max] = range(&state.heat.temperature);
         let [p_min, _] = range(&state.flow.pressure);
         let row = SummaryRow::new;
-        vec![
+        let mut rows = vec![
             row("max_temperature", "K", t_max, Some(328.1)),
             row("min_temperature", "K", t_min, None),
             row("lowest_pore_pressure", "Pa", p_min, Some(0.0116e6)),
@@ -255,7 +258,13 @@ impl PoreScaleBar {
                 run.coupled_steps[1] as f64,
                 None,
             ),
-        ]
+        ];
+        // Where this invocation's wall time went, stage by stage (every step tried).
+        for (stage, seconds) in self.stage_seconds.0.named() {
+            rows.push(row(&format!("wall_seconds_{stage}"), "s", seconds, None));
+        }
+        rows.push(row("wall_seconds_retakes", "s", self.stage_seconds.1, None));
+        rows
     }
 
     /// Temperature of the centreline cell nearest mid-height \[K\].
@@ -466,6 +475,7 @@ impl Scenario for PoreScaleBar {
                 stepper,
                 centre,
                 equivalent,
+                stage_seconds: (StageSeconds::default(), 0.0),
                 cell_pressure: Vec::new(),
                 cell_fraction: Vec::new(),
                 cell_liquid_density: Vec::new(),
@@ -511,6 +521,8 @@ impl Scenario for PoreScaleBar {
                     .map_err(|e| physics(step, time, e))?;
                 run.coupled_steps[0] += r.steps;
                 run.coupled_steps[1] += r.rejected;
+                self.stage_seconds.0.accumulate(&r.stage_seconds);
+                self.stage_seconds.1 += r.retake_seconds;
             }
             None => {
                 self.stepper
