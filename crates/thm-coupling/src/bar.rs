@@ -51,6 +51,8 @@ use crate::pore_scale::{
 pub const BAR_WIDTH: f64 = 0.020;
 /// Length of the bar (y) \[m\].
 pub const BAR_LENGTH: f64 = 0.080;
+/// `[BAR_WIDTH, BAR_LENGTH]`.
+pub const PAPER_BAR: [f64; 2] = [BAR_WIDTH, BAR_LENGTH];
 /// Density of the solid (A-Table 1) \[kg/m³\].
 pub const SOLID_DENSITY: f64 = 2600.0;
 /// Pressure of the water reservoirs at the top (and, in A-Sect. 4, the bottom) \[Pa\].
@@ -110,7 +112,19 @@ impl BarCase {
 /// The bar packing as a DEM state: `thm-vpn-mesh`'s seeded A-Fig. 8 bar, spheres in the
 /// plane, density 2600 kg/m³, every overlapping pair bonded at its current overlap.
 pub fn bar_packing(seed: u64, temperature: f64) -> Result<DemState, CouplingError> {
-    let circles = random_packing(&PackingSpec::paper_bar(seed));
+    bar_packing_sized(seed, temperature, PAPER_BAR)
+}
+
+/// The A-Fig. 8 bar's packing recipe (4–8 mm spheres, about 10 % porosity) on a bar of
+/// `[width, length]` \[m\] (the scaling benchmark's larger bars).
+pub fn bar_packing_sized(
+    seed: u64,
+    temperature: f64,
+    [width, length]: [f64; 2],
+) -> Result<DemState, CouplingError> {
+    let mut spec = PackingSpec::paper_bar(seed);
+    spec.box_max = [width, length];
+    let circles = random_packing(&spec);
     let bonds = overlapping_pairs(&circles)
         .into_iter()
         .map(|[a, b]| (a.min(b) as usize, a.max(b) as usize))
@@ -134,6 +148,11 @@ pub fn bar_packing(seed: u64, temperature: f64) -> Result<DemState, CouplingErro
 /// skeleton, implicit pressure and heat steps, A-Table 1 properties (A-Sect. 6's for case
 /// b), limited cross diffusion (ratio 1; see `thm_fvm_heat::CrossDiffusion`).
 pub fn bar_params(case: BarCase, segments: u32) -> PoreScaleParams {
+    bar_params_sized(case, segments, PAPER_BAR)
+}
+
+/// [`bar_params`] on a bar of `[width, length]` \[m\].
+pub fn bar_params_sized(case: BarCase, segments: u32, size: [f64; 2]) -> PoreScaleParams {
     let end = case.end_temperature();
     let mut heat = HeatParams::paper_a_table_1();
     heat.boundaries = [BoundarySide::Bottom, BoundarySide::Top]
@@ -195,7 +214,7 @@ pub fn bar_params(case: BarCase, segments: u32) -> PoreScaleParams {
         },
         contact: CohesiveFrictionalParams::paper_a_table_1(),
         thermal_expansion,
-        mesh: bar_mesh_params(case, segments),
+        mesh: bar_mesh_params_sized(case, segments, size),
         remesh: RemeshCriteriaParams::default(),
         flow: FlowParameters {
             // Case a: a flow step that needs more sub-steps fails, and the adaptive coupled
@@ -234,10 +253,21 @@ pub fn bar_state(
     seed: u64,
     fluid: &impl thm_vpn_flow::PoreFluid,
 ) -> Result<PoreScaleState, CouplingError> {
+    bar_state_sized(case, config, seed, fluid, PAPER_BAR)
+}
+
+/// [`bar_state`] on a bar of `[width, length]` \[m\] (`config` from [`bar_params_sized`]).
+pub fn bar_state_sized(
+    case: BarCase,
+    config: &PoreScaleConfig,
+    seed: u64,
+    fluid: &impl thm_vpn_flow::PoreFluid,
+    size: [f64; 2],
+) -> Result<PoreScaleState, CouplingError> {
     let t0 = case.initial_temperature();
-    let mut dem = bar_packing(seed, t0)?;
+    let mut dem = bar_packing_sized(seed, t0, size)?;
     if case == BarCase::ContractionFree {
-        hold_ends(&mut dem);
+        hold_ends_of(&mut dem, size[1]);
     }
     PoreScaleState::new(config, dem, fluid, case.initial_fluid(), |_| t0)
 }
@@ -250,8 +280,13 @@ pub const END_HOLD_DEPTH: f64 = 1e-3;
 /// [`END_HOLD_DEPTH`] of either end: A-Sect. 6 case a, "fixed only at both ends" (A-Fig. 20a
 /// shows them black). Returns how many were held.
 pub fn hold_ends(dem: &mut DemState) -> usize {
+    hold_ends_of(dem, BAR_LENGTH)
+}
+
+/// [`hold_ends`] of a bar of `length` \[m\].
+pub fn hold_ends_of(dem: &mut DemState, length: f64) -> usize {
     let p = &mut dem.particles;
-    let [bottom, top] = p.near_ends(0.0, BAR_LENGTH, END_HOLD_DEPTH);
+    let [bottom, top] = p.near_ends(0.0, length, END_HOLD_DEPTH);
     for &i in bottom.iter().chain(&top) {
         p.fixed[i] = true;
         p.velocity[i] = Vec3::new(0.0, 0.0, 0.0);
@@ -499,10 +534,15 @@ pub fn largest_bond_tension(state: &PoreScaleState) -> f64 {
 /// also [`CASE_A_SNAP_TOLERANCE`] and [`CASE_A_NARROW_GAP_LENGTH`] (the other cases keep the
 /// defaults, A-Eq. 9 alone).
 pub fn bar_mesh_params(case: BarCase, segments: u32) -> MeshParams {
+    bar_mesh_params_sized(case, segments, PAPER_BAR)
+}
+
+/// [`bar_mesh_params`] on a bar of `[width, length]` \[m\].
+pub fn bar_mesh_params_sized(case: BarCase, segments: u32, size: [f64; 2]) -> MeshParams {
     let mut mesh = MeshParams::new(
         Outline::Box {
             min: [0.0, 0.0],
-            max: [BAR_WIDTH, BAR_LENGTH],
+            max: size,
         },
         segments,
     );

@@ -145,9 +145,28 @@ impl PoreVolumeGradient {
     }
 
     /// The spheres and gradients `∂V_i/∂c_s` \[m²\] of pore `i`.
+    #[inline]
     pub fn row(&self, i: usize) -> (&[u32], &[[f64; 2]]) {
         let (a, b) = (self.start[i] as usize, self.start[i + 1] as usize);
         (&self.sphere[a..b], &self.gradient[a..b])
+    }
+
+    /// This gradient without the entries of the spheres marked in `drop`, into `out`.
+    pub fn without_spheres(&self, drop: &[bool], out: &mut PoreVolumeGradient) {
+        out.start.clear();
+        out.sphere.clear();
+        out.gradient.clear();
+        out.start.push(0);
+        for i in 0..self.n_pores() {
+            let (s, g) = self.row(i);
+            for (&s, &g) in s.iter().zip(g) {
+                if !drop.get(s as usize).copied().unwrap_or(false) {
+                    out.sphere.push(s);
+                    out.gradient.push(g);
+                }
+            }
+            out.start.push(out.sphere.len() as u32);
+        }
     }
 
     /// Adds `Σ_i P_i ∂V_i/∂c_s` to `out[s]` \[N\].
@@ -168,6 +187,8 @@ impl PoreVolumeGradient {
 #[derive(Debug, Clone, Default)]
 pub struct UndrainedPores {
     gradient: PoreVolumeGradient,
+    /// `gradient` without the entries of held spheres (the implicit correction's rows).
+    free: PoreVolumeGradient,
     start_pressure: Vec<f64>,
     liquid_volume: Vec<f64>,
     gas_volume: Vec<f64>,
@@ -228,6 +249,8 @@ impl UndrainedPores {
         other_force: &[[f64; 2]],
     ) -> Result<(), CouplingError> {
         self.gradient.build(mesh, pore_cell)?;
+        self.gradient
+            .without_spheres(&dem.particles.fixed, &mut self.free);
         let np = self.gradient.n_pores();
         if flow.pressure.len() != np {
             return Err(CouplingError::StateMismatch {
@@ -351,33 +374,25 @@ impl UndrainedPores {
 
     /// `out = K x` with `K = Σ_i k_i g_i g_iᵀ` over the free spheres (`k_i` the tangents of the
     /// last [`UndrainedPores::apply`]).
-    fn product(
-        gradient: &PoreVolumeGradient,
-        tangent: &[f64],
-        fixed: &[bool],
-        x: &[[f64; 2]],
-        out: &mut [[f64; 2]],
-    ) {
+    /// `free` holds the gradient rows without their held spheres (a held sphere's entries
+    /// were skipped, so the sums are the same to the bit).
+    fn product(free: &PoreVolumeGradient, tangent: &[f64], x: &[[f64; 2]], out: &mut [[f64; 2]]) {
         out.fill([0.0; 2]);
-        for (i, &k) in tangent.iter().enumerate().take(gradient.n_pores()) {
+        for (i, &k) in tangent.iter().enumerate().take(free.n_pores()) {
             if k == 0.0 {
                 continue;
             }
-            let (s, g) = gradient.row(i);
+            let (s, g) = free.row(i);
             let mut d = 0.0;
             for (&s, g) in s.iter().zip(g) {
-                if !fixed[s as usize] {
-                    let x = x[s as usize];
-                    d += g[0] * x[0] + g[1] * x[1];
-                }
+                let x = x[s as usize];
+                d += g[0] * x[0] + g[1] * x[1];
             }
             let kd = k * d;
             for (&s, g) in s.iter().zip(g) {
-                if !fixed[s as usize] {
-                    let o = &mut out[s as usize];
-                    o[0] += kd * g[0];
-                    o[1] += kd * g[1];
-                }
+                let o = &mut out[s as usize];
+                o[0] += kd * g[0];
+                o[1] += kd * g[1];
             }
         }
     }
@@ -411,7 +426,7 @@ impl UndrainedPores {
         for (out, v) in velocity.iter_mut().zip(&p.velocity) {
             *out = [v.x, v.y];
         }
-        Self::product(&self.gradient, &self.tangent, &p.fixed, velocity, r);
+        Self::product(&self.free, &self.tangent, velocity, r);
         let mut rhs_norm = 0.0;
         for r in r.iter_mut() {
             r[0] *= h2;
@@ -424,9 +439,9 @@ impl UndrainedPores {
         for (s, diag) in self.cg_diagonal.iter_mut().enumerate() {
             *diag = [p.mass[s]; 2];
         }
-        for i in 0..self.gradient.n_pores() {
+        for i in 0..self.free.n_pores() {
             let k = self.tangent[i];
-            let (s, g) = self.gradient.row(i);
+            let (s, g) = self.free.row(i);
             for (&s, g) in s.iter().zip(g) {
                 let diag = &mut self.cg_diagonal[s as usize];
                 diag[0] += h2 * k * g[0] * g[0];
@@ -449,7 +464,7 @@ impl UndrainedPores {
         let mut rz = dot(r, z);
         let mut converged = false;
         for _ in 0..IMPLICIT_ITERATIONS {
-            Self::product(&self.gradient, &self.tangent, &p.fixed, d, q);
+            Self::product(&self.free, &self.tangent, d, q);
             for (s, (q, d)) in q.iter_mut().zip(d.iter()).enumerate() {
                 let m = if p.fixed[s] { 0.0 } else { p.mass[s] };
                 q[0] = m * d[0] + h2 * q[0];
