@@ -54,7 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         cell_area_rate(black_box(&pm.mesh), &vel_v, &mut rate).unwrap()
     });
     let faces = median_ms(reps, || pm.mesh.update_face_geometry());
-    let channels = median_ms(reps, || pm.mesh.update_channel_geometry(Some(0.5)));
+    let channels = median_ms(reps, || pm.mesh.update_channel_geometry(Some(0.5.into())));
     println!(
         "{} vertices, {} cells, {} faces, {} channels",
         pm.mesh.vertices.len(),
