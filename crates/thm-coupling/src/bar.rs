@@ -214,7 +214,7 @@ pub fn bar_params_sized(case: BarCase, segments: u32, size: [f64; 2]) -> PoreSca
         },
         contact: CohesiveFrictionalParams::paper_a_table_1(),
         thermal_expansion,
-        mesh: bar_mesh_params_sized(case, segments, size),
+        mesh: bar_mesh_params(segments, size),
         remesh: RemeshCriteriaParams::default(),
         flow: FlowParameters {
             // Case a: a flow step that needs more sub-steps fails, and the adaptive coupled
@@ -236,7 +236,8 @@ pub fn bar_params_sized(case: BarCase, segments: u32, size: [f64; 2]) -> PoreSca
         // Case a: the pore pressures push through the cell corners with the pores' undrained
         // springs integrated implicitly (`pore_scale::pore_forces`); with A-Eqs. 52–53 the
         // staggered coupling squeezes liquid-filled pores to 10¹¹ Pa and the run stops at
-        // 2.05 s (docs/cases/bar_contraction_free.md). A held skeleton feels no force.
+        // 0.67 s (2.05 s with the narrow-gap mesher options; docs/cases/
+        // bar_contraction_free.md). A held skeleton feels no force.
         pressure_force: if case == BarCase::ContractionFree {
             PressureForce::CellCorners
         } else {
@@ -400,21 +401,6 @@ pub const CASE_A_DENSITY_SCALE: f64 = 100.0;
 /// with C = 5 T as in A-Table 1 (checked by `dem/uniaxial_tension_bar`).
 pub const CASE_A_BOND_TENSILE_STRENGTH: f64 = 48.29e6;
 
-/// Snap tolerance of case a's mesher (× the smallest radius of a vertex's circles, 2–4 µm on
-/// the bar): vertices closer than that are one. Three pairwise overlapping spheres leave a
-/// curved triangle between their three chord ends; with the default 10⁻⁶ (nm) a gap of
-/// 10⁻¹⁷ m³ (sides of 60 nm) stays a pore, and as the spheres converge it closes within
-/// microseconds, faster than its fluid can leave through its S2S channels (the flow stopped
-/// case a at 0.67 s so). A gap smaller than the S2S apertures of A-Eq. 8 (0.7–3.9 µm) is
-/// part of the contact, not a pore.
-pub const CASE_A_SNAP_TOLERANCE: f64 = 1e-3;
-
-/// T2T faces of case a shorter than this \[m\] (a fortieth of the mean radius) cross a narrow
-/// gap between two spheres and carry at least the zero-stress S2S aperture of A-Eq. 8
-/// (`thm_vpn_mesh::T2tApertureLaw`): the triangles of one narrow gap then share their
-/// pressure instead of squeezing each other's liquid to 10⁸–10¹² Pa.
-pub const CASE_A_NARROW_GAP_LENGTH: f64 = 100e-6;
-
 /// Most flow sub-steps in one coupled step of case a: beyond them the coupled step is
 /// retaken shorter ([`case_a_coupling_step`]).
 pub const CASE_A_FLOW_SUBSTEPS: u32 = 20;
@@ -530,25 +516,16 @@ pub fn largest_bond_tension(state: &PoreScaleState) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// The mesher settings of `case` with `segments` points per circle: the bar's box; case a
-/// also [`CASE_A_SNAP_TOLERANCE`] and [`CASE_A_NARROW_GAP_LENGTH`] (the other cases keep the
-/// defaults, A-Eq. 9 alone).
-pub fn bar_mesh_params(case: BarCase, segments: u32) -> MeshParams {
-    bar_mesh_params_sized(case, segments, PAPER_BAR)
-}
-
-/// [`bar_mesh_params`] on a bar of `[width, length]` \[m\].
-pub fn bar_mesh_params_sized(case: BarCase, segments: u32, size: [f64; 2]) -> MeshParams {
-    let mut mesh = MeshParams::new(
+/// The mesher settings of the bar of `[width, length]` \[m\] with `segments` points per
+/// circle: the paper's (A-Eq. 9 alone, the default snap tolerance). The narrow-gap floor and
+/// a coarser snap (`thm_vpn_mesh::T2tApertureLaw`, `MeshParams::snap_tolerance`) are options
+/// of a scenario (`docs/cases/bar_contraction_free.md` compares case a with and without).
+pub fn bar_mesh_params(segments: u32, size: [f64; 2]) -> MeshParams {
+    MeshParams::new(
         Outline::Box {
             min: [0.0, 0.0],
             max: size,
         },
         segments,
-    );
-    if case == BarCase::ContractionFree {
-        mesh.snap_tolerance = CASE_A_SNAP_TOLERANCE;
-        mesh.narrow_gap_length = CASE_A_NARROW_GAP_LENGTH;
-    }
-    mesh
+    )
 }

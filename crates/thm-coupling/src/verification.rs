@@ -428,9 +428,8 @@ fn contraction_free_case() -> Result<CaseOutput, CaseError> {
     }
     out.notes = vec![
         format!(
-            "Case a of A-Sect. 6 as scenarios/bar_contraction_free.toml runs it: case b's bar and conditions, only the spheres within 1 mm of either end held, bonds T = {:.2} MPa, C = 5 T (thm calibrate's strength for 8.8 MPa, checked by dem/uniaxial_tension_bar), DEM masses x{CASE_A_DENSITY_SCALE}, pore pressures on the spheres through the cell corners with implicit undrained pore springs, narrow gaps (T2T faces under {} um) at the zero-stress S2S aperture, mesher snap 1e-3 r. {steps} coupled steps, {rejected} retaken shorter, {} remeshes, {seconds:.0} s wall.",
+            "Case a of A-Sect. 6 as scenarios/bar_contraction_free.toml runs it: case b's bar and conditions, only the spheres within 1 mm of either end held, bonds T = {:.2} MPa, C = 5 T (thm calibrate's strength for 8.8 MPa, checked by dem/uniaxial_tension_bar), DEM masses x{CASE_A_DENSITY_SCALE}, pore pressures on the spheres through the cell corners with implicit undrained pore springs, the paper's mesher (A-Eq. 9). {steps} coupled steps, {rejected} retaken shorter, {} remeshes, {seconds:.0} s wall.",
             CASE_A_BOND_TENSILE_STRENGTH / 1e6,
-            crate::bar::CASE_A_NARROW_GAP_LENGTH * 1e6,
             s.remeshes
         ),
         "Reported, not checked (docs/cases/bar_contraction_free.md analyses each gap): the packing of A-Fig. 8 cannot be rebuilt and the crack pattern depends on it; the paper states 328.1 K in one place and 333.44 K in another for the largest temperature; its bond tension (29.3 N) is for A-Table 1's bonds, which break at a lower load than the calibrated ones; the channel speed is the largest of any channel, gas included.".into(),

@@ -6,7 +6,8 @@ mod common;
 
 use common::*;
 use thm_coupling::pore_scale::{
-    CouplingError, CouplingStepParams, PoreScaleState, Skeleton, largest_displacement,
+    CouplingError, CouplingStepParams, PoreScaleState, PressureForce, Skeleton,
+    largest_displacement,
 };
 
 fn rule(max_step: f64, min_step: f64, max_displacement: f64) -> CouplingStepParams {
@@ -171,9 +172,15 @@ fn bad_rules_name_the_field() {
 /// The test packing with bonds a thousand times weaker than A-Table 1's, so that the fluid
 /// forces and the thermal gradient break some within a few steps.
 fn weak_bonds() -> thm_coupling::pore_scale::PoreScaleConfig {
+    weak_bonds_pushed(PressureForce::WallFaces)
+}
+
+/// [`weak_bonds`] with the pore pressures pushing as `force` says.
+fn weak_bonds_pushed(force: PressureForce) -> thm_coupling::pore_scale::PoreScaleConfig {
     let mut p = params(Skeleton::Free, eager_remesh());
     p.contact.tensile_strength *= 1e-3;
     p.contact.cohesion *= 1e-3;
+    p.pressure_force = force;
     p.validate().expect("params")
 }
 
@@ -187,8 +194,8 @@ fn broken(s: &PoreScaleState) -> usize {
 }
 
 /// Runs the weak-bond packing for `intervals` intervals of 2·10⁻⁵ s under the adaptive rule.
-fn run_breaking(s: &mut PoreScaleState, intervals: usize) {
-    let config = weak_bonds();
+fn run_breaking(s: &mut PoreScaleState, intervals: usize, force: PressureForce) {
+    let config = weak_bonds_pushed(force);
     let rule = rule(1e-5, 1e-9, 0.02).validate().expect("rule");
     let mut st = stepper(&config, s);
     for _ in 0..intervals {
@@ -196,9 +203,17 @@ fn run_breaking(s: &mut PoreScaleState, intervals: usize) {
     }
 }
 
+/// Both pressure forces: A-Eqs. 52–53, and the cell corners with the implicit undrained
+/// springs (case a's).
 #[test]
 fn through_breakage_and_remeshing_one_and_two_threads_and_a_restore_give_the_same_bits() {
-    let config = weak_bonds();
+    for force in [PressureForce::WallFaces, PressureForce::CellCorners] {
+        breakage_parity(force);
+    }
+}
+
+fn breakage_parity(force: PressureForce) {
+    let config = weak_bonds_pushed(force);
     let s0 = state(&config);
     let pool = |n| {
         rayon::ThreadPoolBuilder::new()
@@ -209,9 +224,9 @@ fn through_breakage_and_remeshing_one_and_two_threads_and_a_restore_give_the_sam
     let run = |threads: usize| {
         pool(threads).install(|| {
             let mut s = s0.clone();
-            run_breaking(&mut s, 3);
+            run_breaking(&mut s, 3, force);
             let half = (broken(&s), serde_json::to_string(&s).expect("save"));
-            run_breaking(&mut s, 3);
+            run_breaking(&mut s, 3, force);
             (half, s)
         })
     };
@@ -219,13 +234,13 @@ fn through_breakage_and_remeshing_one_and_two_threads_and_a_restore_give_the_sam
     let (_, two) = run(2);
     assert!(
         broken(&one) > broken_half && broken_half > 0,
-        "bonds must break before and after the save: {broken_half} then {}",
+        "{force:?}: bonds must break before and after the save: {broken_half} then {}",
         broken(&one)
     );
     assert!(one.remeshes > 0);
     assert_eq!(one, two);
     let mut restored: PoreScaleState = serde_json::from_str(&saved).expect("load");
-    run_breaking(&mut restored, 3);
+    run_breaking(&mut restored, 3, force);
     assert_eq!(one, restored);
 }
 

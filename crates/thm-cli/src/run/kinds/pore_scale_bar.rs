@@ -80,12 +80,12 @@ pub struct BarParams {
     /// default) or `cell_corners` (`thm_coupling::pore_scale::pore_forces`).
     #[serde(default)]
     pub pressure_force: Option<PressureForce>,
-    /// Snap tolerance of the mesher, × the radius (case a only; in 0 … 1e-3; default
-    /// `thm_coupling::bar::CASE_A_SNAP_TOLERANCE`).
+    /// Snap tolerance of the mesher, × the radius (case a only; in 0 … 1e-3; default the
+    /// mesher's 1e-6).
     #[serde(default)]
     pub snap_tolerance: Option<f64>,
     /// T2T faces shorter than this carry at least the zero-stress S2S aperture (case a only;
-    /// 0 m: A-Eq. 9 alone; default `thm_coupling::bar::CASE_A_NARROW_GAP_LENGTH`).
+    /// default 0 m: A-Eq. 9 alone; `thm_vpn_mesh::T2tApertureLaw`).
     #[serde(default)]
     pub narrow_gap_length: Option<Quantity<Length>>,
 }
