@@ -98,15 +98,14 @@
 //! apart within one step (sphere speeds up to 65 m/s).
 //! [`pore_scale::PoreScaleStepper::advance`] retakes a step that moves a sphere by more than
 //! a set fraction of the smallest radius at half length ([`bar::case_a_coupling_step`]).
-//! What is not yet reached is case a's end: after the first breakages the implicit flow
-//! fails in sliver pores (10⁻¹⁸–10⁻¹³ m³ against a median of 10⁻⁹ m³) and the coupled step
-//! shrinks; with the calibrated bonds the run stops at 0.67 s with the flow failing even in
-//! a 10⁻⁷ s coupled step (`docs/cases/bar_contraction_free.md`). The energy-consistent
-//! alternative to A-Eqs. 52–53, the pore pressure through every cell corner with each pore's
-//! undrained response inside the coupled step ([`pore_scale::PressureForce::CellCorners`],
-//! [`pore_scale::pore_forces`]), is in place and tested but stops case a earlier (0.41 s):
-//! thin liquid films between approaching spheres are undrained springs the explicit DEM
-//! cannot resolve at 10⁻⁷ s.
+//! With A-Eqs. 52–53 case a still stops (0.67 s): liquid-filled pores squeezed by a
+//! neighbour's corner reach 10¹¹ Pa, a pressure that acts on no sphere that squeezed them,
+//! one coupled step late. Case a therefore pushes with the pore pressure through every cell
+//! corner, `P_i ∂V_i/∂c_s`, each pore answering undrained inside the coupled step, its
+//! spring integrated implicitly after every DEM sub-step
+//! ([`pore_scale::PressureForce::CellCorners`], [`pore_scale::pore_forces`]): 17 s in about
+//! 4.5 minutes on two cores, both phase masses kept to 10⁻¹² through 144 remeshes
+//! (`coupling/bar_contraction_free`, `docs/cases/bar_contraction_free.md`).
 //!
 //! Temperatures stay between the ends' 278.16 K and the initial 368.16 K in case a (checked
 //! by a `thm run` test through bond breakage). An earlier reading of "fluid cells cooling
