@@ -125,6 +125,7 @@
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+mod blocks;
 pub mod calibration;
 pub mod contact;
 pub mod error;

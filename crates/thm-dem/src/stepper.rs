@@ -30,6 +30,7 @@
 //! a block's own sums stay in cache, and only the contacts that cross a block boundary go
 //! through memory a second time.
 
+use crate::blocks::{BlockRun, for_each_block};
 use crate::contact::{
     BondState, ContactHistory, ContactKinematics, ContactLaw, ContactReport, PairInput,
 };
@@ -40,7 +41,7 @@ use crate::vec3::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
-use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering::Relaxed};
 
 /// Loops shorter than this run serially (rayon's dispatch would cost more than the work);
 /// either way every item is computed by the same code, so the bits do not change.
@@ -388,19 +389,21 @@ impl<L: ContactLaw> Stepper<L> {
             law: &self.law,
             dt: self.config.params.time_step,
             drift,
-            n,
             position: &p.position,
             radius: &p.radius,
             velocity: &p.velocity,
             angular_velocity: &p.angular_velocity,
             temperature: &p.temperature,
             walls,
-            a_start: &self.a_start,
-            wall_start: &self.wall_start,
             touched: &self.touched,
             stamp: self.stamp,
         };
         let slices = BlockSlices {
+            starts: BlockStarts {
+                n,
+                a_start: &self.a_start,
+                wall_start: &self.wall_start,
+            },
             pair: &contacts.pair,
             history: &mut contacts.history,
             report: &mut contacts.report,
@@ -488,22 +491,20 @@ impl<L: ContactLaw> Stepper<L> {
         let (b_start, b_entry) = (&self.b_start[..], &self.b_entry);
         let (block_force, block_torque) = (&self.block_force[..], &self.block_torque[..]);
         let (touched, stamp) = (&self.touched[..], self.stamp);
-        type Block<'a> = (
-            usize,
-            (
-                (
-                    ((&'a mut [Vec3], &'a mut [Vec3]), &'a mut [Vec3]),
-                    &'a mut [Vec3],
-                ),
-                &'a mut [Vec3],
-            ),
-        );
-        // Returns the first particle of the block whose state became non-finite, else
+        // The first particle whose state became non-finite (a minimum over blocks), else
         // `usize::MAX`.
-        let block = |(c, ((((xs, vs), ws), fs), ts)): Block<'_>| -> usize {
+        let first_bad = AtomicUsize::new(usize::MAX);
+        let block = |c: usize, out: Motion<'_>| {
+            let Motion {
+                position: xs,
+                velocity: vs,
+                angular_velocity: ws,
+                force: fs,
+                torque: ts,
+            } = out;
             let s = c * BLOCK;
             let e = s + xs.len();
-            let mut first_bad = usize::MAX;
+            let mut bad = usize::MAX;
             let ranges = b_start[s..=e]
                 .windows(2)
                 .zip(block_force[s..e].iter().zip(&block_torque[s..e]));
@@ -558,34 +559,22 @@ impl<L: ContactLaw> Stepper<L> {
                 }
                 *x += *v * dt;
                 if !all_finite(*x, *v, *w) {
-                    first_bad = first_bad.min(i);
+                    bad = bad.min(i);
                 }
             }
-            first_bad
+            if bad != usize::MAX {
+                first_bad.fetch_min(bad, Relaxed);
+            }
         };
-        let first_bad = if n >= PAR_THRESHOLD {
-            position
-                .par_chunks_mut(BLOCK)
-                .zip(velocity.par_chunks_mut(BLOCK))
-                .zip(angular_velocity.par_chunks_mut(BLOCK))
-                .zip(force.par_chunks_mut(BLOCK))
-                .zip(torque.par_chunks_mut(BLOCK))
-                .enumerate()
-                .map(block)
-                .min()
-                .unwrap_or(usize::MAX)
-        } else {
-            position
-                .chunks_mut(BLOCK)
-                .zip(velocity.chunks_mut(BLOCK))
-                .zip(angular_velocity.chunks_mut(BLOCK))
-                .zip(force.chunks_mut(BLOCK))
-                .zip(torque.chunks_mut(BLOCK))
-                .enumerate()
-                .map(block)
-                .min()
-                .unwrap_or(usize::MAX)
+        let motion = Motion {
+            position,
+            velocity,
+            angular_velocity,
+            force,
+            torque,
         };
+        for_each_block(0..n.div_ceil(BLOCK), motion, n >= PAR_THRESHOLD, &block);
+        let first_bad = first_bad.into_inner();
         let bad = (first_bad != usize::MAX).then_some(first_bad);
         match bad {
             Some(index) => Err(DemError::NonFinite {
@@ -598,10 +587,29 @@ impl<L: ContactLaw> Stepper<L> {
     }
 }
 
+/// Where each block of the contact pass begins in the particle, contact and wall-contact
+/// lists.
+#[derive(Clone, Copy)]
+struct BlockStarts<'a> {
+    n: usize,
+    a_start: &'a [u32],
+    wall_start: &'a [u32],
+}
+
+impl BlockStarts<'_> {
+    /// The first particle, contact and wall contact of block `c` (`c` may be one past the
+    /// last block).
+    fn of(&self, c: usize) -> (usize, usize, usize) {
+        let s = (c * BLOCK).min(self.n);
+        (s, self.a_start[s] as usize, self.wall_start[s] as usize)
+    }
+}
+
 /// The mutable per-contact and per-particle slices of a run of whole blocks: contacts
 /// `a_start[s]..a_start[e]`, wall contacts `wall_start[s]..wall_start[e]` and the block sums
 /// of particles `s..e`.
 struct BlockSlices<'a> {
+    starts: BlockStarts<'a>,
     pair: &'a [[u32; 2]],
     history: &'a mut [ContactHistory],
     report: &'a mut [ContactReport],
@@ -629,8 +637,10 @@ impl<'a> BlockSlices<'a> {
         let (wall_report, wall_report_rest) = self.wall_report.split_at_mut(w);
         let (force, force_rest) = self.force.split_at_mut(i);
         let (torque, torque_rest) = self.torque.split_at_mut(i);
+        let starts = self.starts;
         (
             Self {
+                starts,
                 pair,
                 history,
                 report,
@@ -644,6 +654,7 @@ impl<'a> BlockSlices<'a> {
                 torque,
             },
             Self {
+                starts,
                 pair: pair_rest,
                 history: history_rest,
                 report: report_rest,
@@ -660,66 +671,89 @@ impl<'a> BlockSlices<'a> {
     }
 }
 
+impl BlockRun for BlockSlices<'_> {
+    fn split_at_block(self, run: Range<usize>, at: usize) -> (Self, Self) {
+        let (s0, c0, w0) = self.starts.of(run.start);
+        let (s, c, w) = self.starts.of(at);
+        self.split(c - c0, w - w0, s - s0)
+    }
+}
+
+/// The particle slices that the gather and integration writes, of a run of whole blocks.
+struct Motion<'a> {
+    position: &'a mut [Vec3],
+    velocity: &'a mut [Vec3],
+    angular_velocity: &'a mut [Vec3],
+    force: &'a mut [Vec3],
+    torque: &'a mut [Vec3],
+}
+
+impl BlockRun for Motion<'_> {
+    fn split_at_block(self, run: Range<usize>, at: usize) -> (Self, Self) {
+        let k = ((at - run.start) * BLOCK).min(self.position.len());
+        let (position, position_rest) = self.position.split_at_mut(k);
+        let (velocity, velocity_rest) = self.velocity.split_at_mut(k);
+        let (angular_velocity, angular_velocity_rest) = self.angular_velocity.split_at_mut(k);
+        let (force, force_rest) = self.force.split_at_mut(k);
+        let (torque, torque_rest) = self.torque.split_at_mut(k);
+        (
+            Self {
+                position,
+                velocity,
+                angular_velocity,
+                force,
+                torque,
+            },
+            Self {
+                position: position_rest,
+                velocity: velocity_rest,
+                angular_velocity: angular_velocity_rest,
+                force: force_rest,
+                torque: torque_rest,
+            },
+        )
+    }
+}
+
 /// What every block of the contact pass reads.
 struct BlockPass<'a, L> {
     law: &'a L,
     dt: f64,
     drift: f64,
-    n: usize,
     position: &'a [Vec3],
     radius: &'a [f64],
     velocity: &'a [Vec3],
     angular_velocity: &'a [Vec3],
     temperature: &'a [f64],
     walls: &'a [Wall],
-    a_start: &'a [u32],
-    wall_start: &'a [u32],
     touched: &'a [AtomicU32],
     stamp: u32,
 }
 
 impl<L: ContactLaw> BlockPass<'_, L> {
-    /// The first particle, contact and wall contact of block `c` (`c` may be one past the
-    /// last block).
-    fn block_start(&self, c: usize) -> (usize, usize, usize) {
-        let s = (c * BLOCK).min(self.n);
-        (s, self.a_start[s] as usize, self.wall_start[s] as usize)
-    }
-
-    /// Blocks `blocks` (whose slices are `slices`): halves in parallel (rayon's join) while
-    /// a half holds enough contacts, then block after block. Returns (a bond broke, number
-    /// of particle–particle contacts that carried force): an OR and an integer sum, the same
-    /// for any split.
+    /// Blocks `blocks` (whose slices are `slices`), on every thread of the pool when there
+    /// are enough contacts (see [`for_each_block`]). Returns (a bond broke, number of
+    /// particle–particle contacts that carried force): an OR and an integer sum, the same for
+    /// any assignment of blocks to threads.
     fn over_blocks(&self, blocks: Range<usize>, slices: BlockSlices<'_>) -> (bool, usize) {
-        let (s0, c0, w0) = self.block_start(blocks.start);
-        if blocks.len() > 1 && slices.pair.len() + slices.wall_pair.len() >= 2 * PAR_THRESHOLD {
-            let mid = blocks.start + blocks.len() / 2;
-            let (s, c, w) = self.block_start(mid);
-            let (low, high) = slices.split(c - c0, w - w0, s - s0);
-            let (x, y) = rayon::join(
-                || self.over_blocks(blocks.start..mid, low),
-                || self.over_blocks(mid..blocks.end, high),
-            );
-            return (x.0 | y.0, x.1 + y.1);
-        }
-        let mut rest = slices;
-        let (mut broke, mut count) = (false, 0);
-        for c in blocks {
-            let (s, c_start, w_start) = self.block_start(c);
-            let (e, c_end, w_end) = self.block_start(c + 1);
-            let (block, tail) = rest.split(c_end - c_start, w_end - w_start, e - s);
+        let parallel =
+            blocks.len() > 1 && slices.pair.len() + slices.wall_pair.len() >= 2 * PAR_THRESHOLD;
+        let starts = slices.starts;
+        let (broke, count) = (AtomicBool::new(false), AtomicUsize::new(0));
+        for_each_block(blocks, slices, parallel, &|c, block| {
+            let (s, e) = (starts.of(c).0, starts.of(c + 1).0);
             let (b, k) = self.block(s, e, block);
-            broke |= b;
-            count += k;
-            rest = tail;
-        }
-        (broke, count)
+            broke.fetch_or(b, Relaxed);
+            count.fetch_add(k, Relaxed);
+        });
+        (broke.into_inner(), count.into_inner())
     }
 
     /// One block: particles `s..e`, their contacts as first particle, then their wall
     /// contacts, in list order.
     fn block(&self, s: usize, e: usize, out: BlockSlices<'_>) -> (bool, usize) {
         let BlockSlices {
+            starts: _,
             pair,
             history,
             report,
