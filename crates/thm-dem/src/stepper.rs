@@ -15,14 +15,17 @@
 //!    gap (a block sweeps its contacts in chunks of 64: it first lists, without a branch,
 //!    those that are not such quiet pairs, then evaluates the listed ones in contact order);
 //!    reports whether a bond broke (a boolean OR);
-//! 3. events: broken-bond events (the contacts are scanned only when a bond broke) and wall
-//!    forces, serially in contact order;
-//! 4. gather and integrate, one pass over the particles: every particle sums the spill
-//!    entries of its contacts with earlier blocks in contact-index order (those that carried
-//!    force; when at most a quarter of the contacts did, only the stamped particles look),
+//! 3. gather and integrate, block by block, in the same parallel region as stage 2: the
+//!    gather of a block runs once the contact passes of its own and every earlier block are
+//!    done (a block's contacts read only the particles of its own and later blocks; see
+//!    `blocks.rs` for the schedule): every particle sums the spill entries of its contacts
+//!    with earlier blocks in contact-index order (those that carried force; when at most a
+//!    quarter of the contacts did in the previous step, only the stamped particles look),
 //!    then adds its block's sum, external force and gravity (no floating-point atomics: the
 //!    same bits for any thread count), then Cundall's non-viscous damping (A-Eq. 7) and
 //!    leapfrog, with the finiteness check (the first bad particle is a minimum over indices);
+//! 4. events: broken-bond events (the contacts are scanned only when a bond broke) and wall
+//!    forces, serially in contact order;
 //! 5. walls move at their prescribed velocity.
 //!
 //! Why blocks: storing every contact's full response for a separate gather to read back
@@ -379,7 +382,7 @@ impl<L: ContactLaw> Stepper<L> {
         Ok(())
     }
 
-    /// Stages 2 and 4 in one parallel region (see [`contacts_then_gathers`]): the forces of
+    /// Stages 2 and 3 in one parallel region (see [`contacts_then_gathers`]): the forces of
     /// all particle–particle and particle–wall contacts, block by block of particles (the
     /// blocks are fixed by the index, see [`BLOCK`]), and the gather and integration of each
     /// block once the contacts of its own and of every earlier block are done.
@@ -389,7 +392,7 @@ impl<L: ContactLaw> Stepper<L> {
     /// torques on its own particles into their block sums, in contact order (pairs, then
     /// walls), and leaves the force and torque on a second particle of a later block in that
     /// contact's spill entry for the gather. Returns whether a bond broke in this step (an
-    /// OR over contacts: the same for any thread count), so that stage 3 scans the reports
+    /// OR over contacts: the same for any thread count), so that stage 4 scans the reports
     /// only then, how many particle–particle contacts carried force, and the first particle
     /// whose state became non-finite (a minimum over blocks). `drift` is the pair bound `D`
     /// of [`Drift`] for this step.
@@ -515,7 +518,7 @@ impl<L: ContactLaw> Stepper<L> {
         }
     }
 
-    /// Stage 3: broken-bond events (in contact order; the contacts are scanned only when
+    /// Stage 4: broken-bond events (in contact order; the contacts are scanned only when
     /// stage 2 reported a break) and the forces on the walls.
     fn collect_events(&self, state: &mut DemState, any_broke: bool) {
         if any_broke {
@@ -824,7 +827,7 @@ impl<L: ContactLaw> BlockPass<'_, L> {
         self.count.fetch_add(count, Relaxed);
     }
 
-    /// The gather and integration of block `c` (stages 4 and 5 of the module documentation):
+    /// The gather and integration of block `c` (stage 3 of the module documentation):
     /// each particle sums the spill entries of its contacts with earlier blocks in
     /// contact-index order (those that carried force), then adds the sum its own block
     /// formed (see [`BlockPass::block`]), external force and gravity; then Cundall's
