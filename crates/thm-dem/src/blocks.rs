@@ -77,6 +77,8 @@ impl<'a, T> Rows<'a, T> {
     ///
     /// No thread may write any of the rows `r` (through [`Rows::rows_mut`]) while the returned
     /// slice is in use.
+    // SAFETY: an unsafe fn because its soundness rests on the caller's promise above; the
+    // bounds are checked here.
     unsafe fn rows(&self, r: Range<usize>) -> &[T] {
         assert!(r.start <= r.end && r.end <= self.len, "rows out of range");
         // SAFETY: in bounds (checked above) of a slice that lives for 'a; no writer meanwhile
@@ -90,6 +92,8 @@ impl<'a, T> Rows<'a, T> {
     ///
     /// No other borrow of any of the rows `r` (from [`Rows::rows`] or [`Rows::rows_mut`], by
     /// any thread) may be in use while the returned slice is.
+    // SAFETY: an unsafe fn because its soundness rests on the caller's promise above; the
+    // bounds are checked here.
     #[allow(clippy::mut_from_ref)]
     unsafe fn rows_mut(&self, r: Range<usize>) -> &mut [T] {
         assert!(r.start <= r.end && r.end <= self.len, "rows out of range");
