@@ -14,7 +14,9 @@
 //! (pure computation, so the wait is finite) and returns only when all are done: a rayon
 //! worker that finds nothing to steal goes to sleep after a few microseconds, and waking
 //! it again (a futex wake of a halted virtual CPU) cost about 60 µs per step on the
-//! 10⁴-sphere bed, more than the imbalance it waited for.
+//! 10⁴-sphere bed, more than the imbalance it waited for. Only past [`MAX_WAIT`] (the thread
+//! it waits for lost its core on a loaded machine) does it return earlier and leave the
+//! remaining jobs to the threads still working.
 //!
 //! Which thread runs a contact or a gather changes nothing in its result.
 //!
@@ -29,12 +31,18 @@ use std::marker::PhantomData;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Mutex, PoisonError};
+use std::time::{Duration, Instant};
 
 /// Spins (with the CPU's pause hint, up to about 140 cycles each on recent x86) before a
 /// waiting thread starts yielding its core between polls: a thread that holds the contact
 /// or gather it waits for may have been descheduled on a loaded (or oversubscribed)
 /// machine. Yielding does not sleep: an idle core returns at once.
 const SPINS_BEFORE_YIELD: u32 = 1 << 8;
+
+/// How long a thread waits for another's contact or gather before it leaves the work to the
+/// others: a few contact blocks of the 10⁴-sphere bed (about 40 µs each) on an unloaded
+/// machine, so that only a thread that lost its core waits longer.
+const MAX_WAIT: Duration = Duration::from_micros(150);
 
 /// The part of the contact pass's data that belongs to a run of whole blocks, split
 /// between blocks.
@@ -392,43 +400,60 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
         let _abort = AbortOnPanic(&abort);
         let lock = || schedule.lock().unwrap_or_else(PoisonError::into_inner);
         let mut job = lock().next_job();
-        let mut spins = 0_u32;
+        let mut waiter = Waiter::default();
         loop {
             if abort.load(Ordering::Acquire) {
                 return;
             }
             job = match job {
                 Job::Contact(c, block) => {
+                    waiter = Waiter::default();
                     contact(c, block);
                     lock().contact_done(c)
                 }
                 Job::Gather(j) => {
+                    waiter = Waiter::default();
                     gather(j);
                     gathers_done.fetch_add(1, Ordering::Release);
                     lock().next_job()
                 }
-                Job::Wait => {
-                    wait(&mut spins);
-                    lock().next_job()
-                }
+                // Another thread is inside a contact that a gather waits for. Past the
+                // waiting time (a descheduled thread on a loaded machine), this thread leaves
+                // the rest to the threads still working: each job may run on any of them.
+                Job::Wait if waiter.poll() => lock().next_job(),
+                Job::Wait => return,
                 Job::Finished => break,
             };
         }
         // Every gather is taken: wait for those still running elsewhere, so that this
         // thread does not go to sleep in rayon's join (see the module documentation).
-        while gathers_done.load(Ordering::Acquire) < blocks && !abort.load(Ordering::Acquire) {
-            wait(&mut spins);
-        }
+        while gathers_done.load(Ordering::Acquire) < blocks
+            && !abort.load(Ordering::Acquire)
+            && waiter.poll()
+        {}
     };
     participants(threads, &participant);
 }
 
-fn wait(spins: &mut u32) {
-    if *spins < SPINS_BEFORE_YIELD {
-        *spins += 1;
-        spin_loop();
-    } else {
-        std::thread::yield_now();
+/// Polls for another thread's progress: spins, then yields its core between polls, and
+/// after [`MAX_WAIT`] says to stop waiting (and let rayon's join sleep if it must).
+#[derive(Default)]
+struct Waiter {
+    polls: u32,
+    since: Option<Instant>,
+}
+
+impl Waiter {
+    /// One poll; `false` once [`MAX_WAIT`] has passed since the first.
+    fn poll(&mut self) -> bool {
+        let since = *self.since.get_or_insert_with(Instant::now);
+        if self.polls < SPINS_BEFORE_YIELD {
+            spin_loop();
+        } else {
+            std::thread::yield_now();
+        }
+        self.polls += 1;
+        self.polls % 64 != 0 || since.elapsed() < MAX_WAIT
     }
 }
 
