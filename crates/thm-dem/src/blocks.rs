@@ -453,7 +453,7 @@ impl Waiter {
             std::thread::yield_now();
         }
         self.polls += 1;
-        self.polls % 64 != 0 || since.elapsed() < MAX_WAIT
+        !self.polls.is_multiple_of(64) || since.elapsed() < MAX_WAIT
     }
 }
 
