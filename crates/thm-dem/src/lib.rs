@@ -111,11 +111,13 @@
 //! events) is owned by the caller and round-trips through serde bit for bit; parameters are
 //! serde structs validated once ([`StepperParams`], [`CohesiveFrictionalParams`],
 //! [`LinearSpringParams`]); the [`Stepper`] holds only scratch buffers. A step is a fixed
-//! sequence of stages (neighbour update, contact forces, events, gather with integration).
+//! sequence of stages (neighbour update, contact forces with gather and integration, events).
 //! Contacts are computed in parallel (rayon) by fixed blocks of particles, each contact writing
 //! only its own entry and each block summing the forces on its own particles in contact order;
 //! a particle then adds the shares of contacts from earlier blocks in contact-index order, so
-//! 1 and 2 threads give identical bits (no floating-point atomics).
+//! 1 and 2 threads give identical bits (no floating-point atomics). A block is integrated as
+//! soon as the contacts of its own and every earlier block are done, in the same parallel
+//! region.
 //! Neighbour search is an O(N) cell grid with a Verlet skin; a listed pair found apart is not
 //! looked at again until the particles' drift could have closed its gap (the contact pass
 //! lists the other contacts branch-free and evaluates only those), so the skin changes
@@ -125,6 +127,7 @@
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+mod blocks;
 pub mod calibration;
 pub mod contact;
 pub mod error;

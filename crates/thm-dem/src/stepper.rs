@@ -15,14 +15,17 @@
 //!    gap (a block sweeps its contacts in chunks of 64: it first lists, without a branch,
 //!    those that are not such quiet pairs, then evaluates the listed ones in contact order);
 //!    reports whether a bond broke (a boolean OR);
-//! 3. events: broken-bond events (the contacts are scanned only when a bond broke) and wall
-//!    forces, serially in contact order;
-//! 4. gather and integrate, one pass over the particles: every particle sums the spill
-//!    entries of its contacts with earlier blocks in contact-index order (those that carried
-//!    force; when at most a quarter of the contacts did, only the stamped particles look),
+//! 3. gather and integrate, block by block, in the same parallel region as stage 2: the
+//!    gather of a block runs once the contact passes of its own and every earlier block are
+//!    done (a block's contacts read only the particles of its own and later blocks; see
+//!    `blocks.rs` for the schedule): every particle sums the spill entries of its contacts
+//!    with earlier blocks in contact-index order (those that carried force; when at most a
+//!    quarter of the contacts did in the previous step, only the stamped particles look),
 //!    then adds its block's sum, external force and gravity (no floating-point atomics: the
 //!    same bits for any thread count), then Cundall's non-viscous damping (A-Eq. 7) and
 //!    leapfrog, with the finiteness check (the first bad particle is a minimum over indices);
+//! 4. events: broken-bond events (the contacts are scanned only when a bond broke) and wall
+//!    forces, serially in contact order;
 //! 5. walls move at their prescribed velocity.
 //!
 //! Why blocks: storing every contact's full response for a separate gather to read back
@@ -30,6 +33,9 @@
 //! a block's own sums stay in cache, and only the contacts that cross a block boundary go
 //! through memory a second time.
 
+use crate::blocks::{
+    BlockRun, ContactRows, GatherRows, Layout, PassRows, Stages, contacts_then_gathers,
+};
 use crate::contact::{
     BondState, ContactHistory, ContactKinematics, ContactLaw, ContactReport, PairInput,
 };
@@ -40,7 +46,7 @@ use crate::vec3::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
-use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering::Relaxed};
 
 /// Loops shorter than this run serially (rayon's dispatch would cost more than the work);
 /// either way every item is computed by the same code, so the bits do not change.
@@ -137,6 +143,12 @@ pub struct Stepper<L: ContactLaw> {
     /// A listed pair found apart (and unbonded, without shear) stays apart while the drift
     /// (see [`Drift`]) is below its entry: it is not looked at again until then.
     quiet_below: Vec<f64>,
+    /// Whether the gather reads spill entries only for stamped particles: set when at most
+    /// a quarter of the contacts carried force in the previous step. Only the speed depends
+    /// on it: a particle that no contact stamped has zero spill entries only.
+    sparse: bool,
+    /// Scratch of the contact-and-gather schedule.
+    stages: Stages,
 }
 
 /// How far the particles moved since the last neighbour search, as two bounds.
@@ -184,6 +196,8 @@ impl<L: ContactLaw> Stepper<L> {
             touched: Vec::new(),
             stamp: 0,
             quiet_below: Vec::new(),
+            sparse: false,
+            stages: Stages::default(),
         }
     }
 
@@ -207,11 +221,18 @@ impl<L: ContactLaw> Stepper<L> {
     pub fn step(&mut self, state: &mut DemState) -> Result<(), DemError> {
         let drift = self.update_neighbours(state)?;
         self.next_stamp(state.particles.len());
-        let (any_broke, active_count) = self.compute_contact_forces(state, drift);
+        let (any_broke, active_count, first_bad) = self.forces_and_motion(state, drift);
+        // Few contacts carried force: the next step's gather visits only the stamped
+        // particles (a choice of speed only, see `touched`).
+        self.sparse = active_count.saturating_mul(4) <= state.contacts.len();
         self.collect_events(state, any_broke);
-        // Few contacts carried force: the gather visits only the stamped particles.
-        let sparse = active_count.saturating_mul(4) <= state.contacts.len();
-        self.gather_and_integrate(state, sparse)?;
+        if let Some(index) = first_bad {
+            return Err(DemError::NonFinite {
+                quantity: "position or velocity",
+                index,
+                step: state.step,
+            });
+        }
         let dt = self.config.params.time_step;
         for w in &mut state.walls {
             w.point += w.velocity * dt;
@@ -361,17 +382,25 @@ impl<L: ContactLaw> Stepper<L> {
         Ok(())
     }
 
-    /// Stage 2: forces of all particle–particle and particle–wall contacts, block by block
-    /// of particles in parallel (the blocks are fixed by the index, see [`BLOCK`]). A block
-    /// owns the contacts whose first particle it holds (a range of the sorted list) and its
-    /// particles' wall contacts; it sums every contact's force and torques on its own
-    /// particles into their block sums, in contact order (pairs, then walls), and leaves the
-    /// force and torque on a second particle of a later block in that contact's spill entry
-    /// for the gather. Returns whether a bond broke in this step (an OR over contacts: the
-    /// same for any thread count), so that stage 3 scans the reports only then, and how many
-    /// particle–particle contacts carried force. `drift` is the pair bound `D` of [`Drift`]
-    /// for this step.
-    fn compute_contact_forces(&mut self, state: &mut DemState, drift: f64) -> (bool, usize) {
+    /// Stages 2 and 3 in one parallel region (see [`contacts_then_gathers`]): the forces of
+    /// all particle–particle and particle–wall contacts, block by block of particles (the
+    /// blocks are fixed by the index, see [`BLOCK`]), and the gather and integration of each
+    /// block once the contacts of its own and of every earlier block are done.
+    ///
+    /// A block's contact pass owns the contacts whose first particle it holds (a range of
+    /// the sorted list) and its particles' wall contacts; it sums every contact's force and
+    /// torques on its own particles into their block sums, in contact order (pairs, then
+    /// walls), and leaves the force and torque on a second particle of a later block in that
+    /// contact's spill entry for the gather. Returns whether a bond broke in this step (an
+    /// OR over contacts: the same for any thread count), so that stage 4 scans the reports
+    /// only then, how many particle–particle contacts carried force, and the first particle
+    /// whose state became non-finite (a minimum over blocks). `drift` is the pair bound `D`
+    /// of [`Drift`] for this step.
+    fn forces_and_motion(
+        &mut self,
+        state: &mut DemState,
+        drift: f64,
+    ) -> (bool, usize, Option<usize>) {
         let n = state.particles.len();
         let DemState {
             particles: p,
@@ -384,36 +413,95 @@ impl<L: ContactLaw> Stepper<L> {
         self.spill.resize(contacts.len(), [Vec3::ZERO; 2]);
         self.block_force.resize(n, Vec3::ZERO);
         self.block_torque.resize(n, Vec3::ZERO);
+        let ParticleState {
+            kinematics,
+            position,
+            velocity,
+            angular_velocity,
+            radius,
+            mass,
+            inertia,
+            temperature,
+            fixed,
+            external_force,
+            external_torque,
+            force,
+            torque,
+            ..
+        } = p;
+        let parallel = contacts.len() + wall_contacts.len() >= 2 * PAR_THRESHOLD;
         let pass = BlockPass {
             law: &self.law,
             dt: self.config.params.time_step,
             drift,
+            gravity: self.config.gravity,
+            damping: self.config.params.damping,
+            planar: kinematics.is_planar(),
+            sparse: self.sparse,
             n,
-            position: &p.position,
-            radius: &p.radius,
-            velocity: &p.velocity,
-            angular_velocity: &p.angular_velocity,
-            temperature: &p.temperature,
+            b_start: &self.b_start,
+            b_entry: &self.b_entry,
+            radius,
+            temperature,
+            mass,
+            inertia,
+            fixed,
+            external_force,
+            external_torque,
             walls,
-            a_start: &self.a_start,
-            wall_start: &self.wall_start,
             touched: &self.touched,
             stamp: self.stamp,
+            broke: AtomicBool::new(false),
+            count: AtomicUsize::new(0),
+            first_bad: AtomicUsize::new(usize::MAX),
+        };
+        let starts = BlockStarts {
+            n,
+            a_start: &self.a_start,
+            wall_start: &self.wall_start,
         };
         let slices = BlockSlices {
+            starts,
             pair: &contacts.pair,
             history: &mut contacts.history,
             report: &mut contacts.report,
             active: &mut self.active,
             quiet: &mut self.quiet_below,
-            spill: &mut self.spill,
             wall_pair: &wall_contacts.pair,
             wall_history: &mut wall_contacts.history,
             wall_report: &mut wall_contacts.report,
-            force: &mut self.block_force,
-            torque: &mut self.block_torque,
         };
-        pass.over_blocks(0..n.div_ceil(BLOCK), slices)
+        // A block's spill entries are those of its contacts (one per contact).
+        let layout = Layout {
+            n,
+            block: BLOCK,
+            spill_start: &self.a_start,
+        };
+        let rows = PassRows::new(
+            position,
+            velocity,
+            angular_velocity,
+            force,
+            torque,
+            &mut self.block_force,
+            &mut self.block_torque,
+            &mut self.spill,
+        );
+        contacts_then_gathers(
+            layout,
+            &rows,
+            slices,
+            &mut self.stages,
+            parallel,
+            &|c, block, rows| pass.block(c, block, rows),
+            &|j, rows| pass.gather(j, rows),
+        );
+        let first_bad = pass.first_bad.into_inner();
+        (
+            pass.broke.into_inner(),
+            pass.count.into_inner(),
+            (first_bad != usize::MAX).then_some(first_bad),
+        )
     }
 
     /// A new stamp for this step's contact pass (see `touched`), with `touched` sized for
@@ -430,7 +518,7 @@ impl<L: ContactLaw> Stepper<L> {
         }
     }
 
-    /// Stage 3: broken-bond events (in contact order; the contacts are scanned only when
+    /// Stage 4: broken-bond events (in contact order; the contacts are scanned only when
     /// stage 2 reported a break) and the forces on the walls.
     fn collect_events(&self, state: &mut DemState, any_broke: bool) {
         if any_broke {
@@ -455,292 +543,154 @@ impl<L: ContactLaw> Stepper<L> {
             }
         }
     }
+}
 
-    /// Stages 4 and 5 in one pass over the particles: each sums the spill entries of its
-    /// contacts with earlier blocks in contact-index order (those that carried force), then
-    /// adds the sum its own block formed (see [`BlockPass::block`]), external force and
-    /// gravity; then Cundall's non-viscous damping (A-Eq. 7) and the leapfrog update, with the
-    /// finiteness check (the first bad particle is a minimum over indices). Fixed particles
-    /// move at their prescribed velocity; plane kinematics keep `z = 0`, `v_z = 0`,
-    /// `ω_x = ω_y = 0`.
-    fn gather_and_integrate(&self, state: &mut DemState, sparse: bool) -> Result<(), DemError> {
-        let g = self.config.gravity;
-        let dt = self.config.params.time_step;
-        let alpha = self.config.params.damping;
-        let step = state.step;
-        let ParticleState {
-            kinematics,
-            position,
-            velocity,
-            angular_velocity,
-            mass,
-            inertia,
-            fixed,
-            external_force,
-            external_torque,
-            force,
-            torque,
-            ..
-        } = &mut state.particles;
-        let planar = kinematics.is_planar();
-        let n = position.len();
-        let spill = &self.spill[..];
-        let (b_start, b_entry) = (&self.b_start[..], &self.b_entry);
-        let (block_force, block_torque) = (&self.block_force[..], &self.block_torque[..]);
-        let (touched, stamp) = (&self.touched[..], self.stamp);
-        type Block<'a> = (
-            usize,
-            (
-                (
-                    ((&'a mut [Vec3], &'a mut [Vec3]), &'a mut [Vec3]),
-                    &'a mut [Vec3],
-                ),
-                &'a mut [Vec3],
-            ),
-        );
-        // Returns the first particle of the block whose state became non-finite, else
-        // `usize::MAX`.
-        let block = |(c, ((((xs, vs), ws), fs), ts)): Block<'_>| -> usize {
-            let s = c * BLOCK;
-            let e = s + xs.len();
-            let mut first_bad = usize::MAX;
-            let ranges = b_start[s..=e]
-                .windows(2)
-                .zip(block_force[s..e].iter().zip(&block_torque[s..e]));
-            let loads = fixed[s..e]
-                .iter()
-                .zip(external_force[s..e].iter().zip(&external_torque[s..e]));
-            for (
-                j,
-                (
-                    ((((((x, v), w), f_out), t_out), (&m, &inertia)), (&fixed, (fe, te))),
-                    (b_range, (f_block, t_block)),
-                ),
-            ) in xs
-                .iter_mut()
-                .zip(vs.iter_mut())
-                .zip(ws.iter_mut())
-                .zip(fs.iter_mut())
-                .zip(ts.iter_mut())
-                .zip(mass[s..e].iter().zip(&inertia[s..e]))
-                .zip(loads)
-                .zip(ranges)
-                .enumerate()
-            {
-                let i = s + j;
-                let mut fi = Vec3::ZERO;
-                let mut ti = Vec3::ZERO;
-                if !(sparse && touched[i].load(Relaxed) != stamp) {
-                    // No test of the contact's activity: an inactive contact's spill entry
-                    // is zero (see `spill`).
-                    for &k in &b_entry[b_range[0] as usize..b_range[1] as usize] {
-                        let [f, t] = spill[k as usize];
-                        fi += f;
-                        ti += t;
-                    }
-                }
-                fi += *f_block;
-                ti += *t_block;
-                *f_out = fi + *fe + g * m;
-                *t_out = ti + *te;
-                if !fixed {
-                    let inv_m = 1.0 / m;
-                    let inv_i = 1.0 / inertia;
-                    let f = cundall_damping(*f_out, *v, dt * inv_m, alpha);
-                    let t = cundall_damping(*t_out, *w, dt * inv_i, alpha);
-                    *v += f * (dt * inv_m);
-                    *w += t * (dt * inv_i);
-                    if planar {
-                        v.z = 0.0;
-                        w.x = 0.0;
-                        w.y = 0.0;
-                    }
-                }
-                *x += *v * dt;
-                if !all_finite(*x, *v, *w) {
-                    first_bad = first_bad.min(i);
-                }
-            }
-            first_bad
-        };
-        let first_bad = if n >= PAR_THRESHOLD {
-            position
-                .par_chunks_mut(BLOCK)
-                .zip(velocity.par_chunks_mut(BLOCK))
-                .zip(angular_velocity.par_chunks_mut(BLOCK))
-                .zip(force.par_chunks_mut(BLOCK))
-                .zip(torque.par_chunks_mut(BLOCK))
-                .enumerate()
-                .map(block)
-                .min()
-                .unwrap_or(usize::MAX)
-        } else {
-            position
-                .chunks_mut(BLOCK)
-                .zip(velocity.chunks_mut(BLOCK))
-                .zip(angular_velocity.chunks_mut(BLOCK))
-                .zip(force.chunks_mut(BLOCK))
-                .zip(torque.chunks_mut(BLOCK))
-                .enumerate()
-                .map(block)
-                .min()
-                .unwrap_or(usize::MAX)
-        };
-        let bad = (first_bad != usize::MAX).then_some(first_bad);
-        match bad {
-            Some(index) => Err(DemError::NonFinite {
-                quantity: "position or velocity",
-                index,
-                step,
-            }),
-            None => Ok(()),
-        }
+/// Where each block of the contact pass begins in the particle, contact and wall-contact
+/// lists.
+#[derive(Clone, Copy)]
+struct BlockStarts<'a> {
+    n: usize,
+    a_start: &'a [u32],
+    wall_start: &'a [u32],
+}
+
+impl BlockStarts<'_> {
+    /// The first particle, contact and wall contact of block `c` (`c` may be one past the
+    /// last block).
+    fn of(&self, c: usize) -> (usize, usize, usize) {
+        let s = (c * BLOCK).min(self.n);
+        (s, self.a_start[s] as usize, self.wall_start[s] as usize)
     }
 }
 
-/// The mutable per-contact and per-particle slices of a run of whole blocks: contacts
-/// `a_start[s]..a_start[e]`, wall contacts `wall_start[s]..wall_start[e]` and the block sums
-/// of particles `s..e`.
+/// The mutable per-contact slices of a run of whole blocks of particles `s..e`: contacts
+/// `a_start[s]..a_start[e]` and wall contacts `wall_start[s]..wall_start[e]`.
 struct BlockSlices<'a> {
+    starts: BlockStarts<'a>,
     pair: &'a [[u32; 2]],
     history: &'a mut [ContactHistory],
     report: &'a mut [ContactReport],
     active: &'a mut [u8],
     quiet: &'a mut [f64],
-    spill: &'a mut [[Vec3; 2]],
     wall_pair: &'a [[u32; 2]],
     wall_history: &'a mut [ContactHistory],
     wall_report: &'a mut [ContactReport],
-    force: &'a mut [Vec3],
-    torque: &'a mut [Vec3],
 }
 
 impl<'a> BlockSlices<'a> {
-    /// Splits before contact `c`, wall contact `w` and particle `i` (offsets into `self`).
-    fn split(self, c: usize, w: usize, i: usize) -> (Self, Self) {
+    /// Splits before contact `c` and wall contact `w` (offsets into `self`).
+    fn split(self, c: usize, w: usize) -> (Self, Self) {
         let (pair, pair_rest) = self.pair.split_at(c);
         let (history, history_rest) = self.history.split_at_mut(c);
         let (report, report_rest) = self.report.split_at_mut(c);
         let (active, active_rest) = self.active.split_at_mut(c);
         let (quiet, quiet_rest) = self.quiet.split_at_mut(c);
-        let (spill, spill_rest) = self.spill.split_at_mut(c);
         let (wall_pair, wall_pair_rest) = self.wall_pair.split_at(w);
         let (wall_history, wall_history_rest) = self.wall_history.split_at_mut(w);
         let (wall_report, wall_report_rest) = self.wall_report.split_at_mut(w);
-        let (force, force_rest) = self.force.split_at_mut(i);
-        let (torque, torque_rest) = self.torque.split_at_mut(i);
+        let starts = self.starts;
         (
             Self {
+                starts,
                 pair,
                 history,
                 report,
                 active,
                 quiet,
-                spill,
                 wall_pair,
                 wall_history,
                 wall_report,
-                force,
-                torque,
             },
             Self {
+                starts,
                 pair: pair_rest,
                 history: history_rest,
                 report: report_rest,
                 active: active_rest,
                 quiet: quiet_rest,
-                spill: spill_rest,
                 wall_pair: wall_pair_rest,
                 wall_history: wall_history_rest,
                 wall_report: wall_report_rest,
-                force: force_rest,
-                torque: torque_rest,
             },
         )
     }
 }
 
-/// What every block of the contact pass reads.
+impl BlockRun for BlockSlices<'_> {
+    fn split_at_block(self, run: Range<usize>, at: usize) -> (Self, Self) {
+        let (_, c0, w0) = self.starts.of(run.start);
+        let (_, c, w) = self.starts.of(at);
+        self.split(c - c0, w - w0)
+    }
+}
+
+/// What the contact pass and the gather of every block read (besides the rows that
+/// [`contacts_then_gathers`] lends them) and what they report.
 struct BlockPass<'a, L> {
     law: &'a L,
     dt: f64,
     drift: f64,
+    gravity: Vec3,
+    damping: f64,
+    planar: bool,
+    /// Whether the gather reads spill entries only for stamped particles (see `touched`).
+    sparse: bool,
     n: usize,
-    position: &'a [Vec3],
+    b_start: &'a [u32],
+    b_entry: &'a [u32],
     radius: &'a [f64],
-    velocity: &'a [Vec3],
-    angular_velocity: &'a [Vec3],
     temperature: &'a [f64],
+    mass: &'a [f64],
+    inertia: &'a [f64],
+    fixed: &'a [bool],
+    external_force: &'a [Vec3],
+    external_torque: &'a [Vec3],
     walls: &'a [Wall],
-    a_start: &'a [u32],
-    wall_start: &'a [u32],
     touched: &'a [AtomicU32],
     stamp: u32,
+    /// Whether a bond broke, how many particle–particle contacts carried force, the first
+    /// particle whose state became non-finite (`usize::MAX` if none): an OR, an integer sum
+    /// and a minimum over blocks, the same for any thread count.
+    broke: AtomicBool,
+    count: AtomicUsize,
+    first_bad: AtomicUsize,
 }
 
 impl<L: ContactLaw> BlockPass<'_, L> {
-    /// The first particle, contact and wall contact of block `c` (`c` may be one past the
-    /// last block).
-    fn block_start(&self, c: usize) -> (usize, usize, usize) {
-        let s = (c * BLOCK).min(self.n);
-        (s, self.a_start[s] as usize, self.wall_start[s] as usize)
+    /// Particles `s..e` of block `c`.
+    fn particles(&self, c: usize) -> Range<usize> {
+        (c * BLOCK).min(self.n)..((c + 1) * BLOCK).min(self.n)
     }
 
-    /// Blocks `blocks` (whose slices are `slices`): halves in parallel (rayon's join) while
-    /// a half holds enough contacts, then block after block. Returns (a bond broke, number
-    /// of particle–particle contacts that carried force): an OR and an integer sum, the same
-    /// for any split.
-    fn over_blocks(&self, blocks: Range<usize>, slices: BlockSlices<'_>) -> (bool, usize) {
-        let (s0, c0, w0) = self.block_start(blocks.start);
-        if blocks.len() > 1 && slices.pair.len() + slices.wall_pair.len() >= 2 * PAR_THRESHOLD {
-            let mid = blocks.start + blocks.len() / 2;
-            let (s, c, w) = self.block_start(mid);
-            let (low, high) = slices.split(c - c0, w - w0, s - s0);
-            let (x, y) = rayon::join(
-                || self.over_blocks(blocks.start..mid, low),
-                || self.over_blocks(mid..blocks.end, high),
-            );
-            return (x.0 | y.0, x.1 + y.1);
-        }
-        let mut rest = slices;
-        let (mut broke, mut count) = (false, 0);
-        for c in blocks {
-            let (s, c_start, w_start) = self.block_start(c);
-            let (e, c_end, w_end) = self.block_start(c + 1);
-            let (block, tail) = rest.split(c_end - c_start, w_end - w_start, e - s);
-            let (b, k) = self.block(s, e, block);
-            broke |= b;
-            count += k;
-            rest = tail;
-        }
-        (broke, count)
-    }
-
-    /// One block: particles `s..e`, their contacts as first particle, then their wall
-    /// contacts, in list order.
-    fn block(&self, s: usize, e: usize, out: BlockSlices<'_>) -> (bool, usize) {
+    /// The contact pass of block `c`: particles `s..e`, their contacts as first particle,
+    /// then their wall contacts, in list order. Reads the kinematics of particles `s..`
+    /// only (a pair `[a, b]` of the block has `s <= a < e` and `a < b`; a particle outside
+    /// the rows panics) and writes its contacts' data, their spill entries and its block
+    /// sums.
+    fn block(&self, c: usize, out: BlockSlices<'_>, rows: ContactRows<'_>) {
         let BlockSlices {
+            starts: _,
             pair,
             history,
             report,
             active,
             quiet,
-            spill,
             wall_pair,
             wall_history,
             wall_report,
-            force,
-            torque,
         } = out;
+        let Range { start: s, end: e } = self.particles(c);
+        let ContactRows {
+            position: x,
+            velocity: v,
+            angular_velocity: w,
+            spill,
+            block_force: force,
+            block_torque: torque,
+        } = rows;
         force.fill(Vec3::ZERO);
         torque.fill(Vec3::ZERO);
-        let (x, radius, v, w, t) = (
-            self.position,
-            self.radius,
-            self.velocity,
-            self.angular_velocity,
-            self.temperature,
-        );
+        let (radius, t) = (self.radius, self.temperature);
         let (drift, dt) = (self.drift, self.dt);
         let (mut broke, mut count) = (false, 0);
         // Chunk by chunk of `LIVE_CHUNK` contacts (small enough that the chunk's histories
@@ -779,7 +729,7 @@ impl<L: ContactLaw> BlockPass<'_, L> {
                 );
                 let (a, b) = (pair[0] as usize, pair[1] as usize);
                 let (ra, rb) = (radius[a], radius[b]);
-                let branch = x[b] - x[a];
+                let branch = x[b - s] - x[a - s];
                 // A listed pair that neither touches nor is bonded nor carries shear costs one
                 // squared distance. Its history's normal doubles as the flag "report already
                 // cleared": every evaluation below sets it to a unit vector.
@@ -804,7 +754,9 @@ impl<L: ContactLaw> BlockPass<'_, L> {
                     }
                 }
                 *q = f64::NEG_INFINITY;
-                let kin = ContactKinematics::from_pair(branch, v[b] - v[a], w[a], w[b], ra, rb, dt);
+                let (va, vb) = (v[a - s], v[b - s]);
+                let kin =
+                    ContactKinematics::from_pair(branch, vb - va, w[a - s], w[b - s], ra, rb, dt);
                 let input = PairInput {
                     radius_a: ra,
                     radius_b: rb,
@@ -840,7 +792,7 @@ impl<L: ContactLaw> BlockPass<'_, L> {
             let ra = radius[a];
             // As for pairs: apart, unbonded and without shear costs one distance.
             if h.bond != BondState::Intact && is_zero(h.shear_force) {
-                let gap = (x[a] - wall.point).dot(wall.normal);
+                let gap = (x[a - s] - wall.point).dot(wall.normal);
                 if ra - gap - h.reference_penetration <= 0.0 {
                     if !is_zero(h.normal) {
                         h.normal = Vec3::ZERO;
@@ -850,9 +802,9 @@ impl<L: ContactLaw> BlockPass<'_, L> {
                 }
             }
             let kin = ContactKinematics::from_wall(
-                x[a],
-                v[a],
-                w[a],
+                x[a - s],
+                v[a - s],
+                w[a - s],
                 ra,
                 wall.point,
                 wall.normal,
@@ -871,7 +823,103 @@ impl<L: ContactLaw> BlockPass<'_, L> {
                 torque[a - s] += r.torque_on_a;
             }
         }
-        (broke, count)
+        self.broke.fetch_or(broke, Relaxed);
+        self.count.fetch_add(count, Relaxed);
+    }
+
+    /// The gather and integration of block `c` (stage 3 of the module documentation):
+    /// each particle sums the spill entries of its contacts with earlier blocks in
+    /// contact-index order (those that carried force), then adds the sum its own block
+    /// formed (see [`BlockPass::block`]), external force and gravity; then Cundall's
+    /// non-viscous damping (A-Eq. 7) and the leapfrog update, with the finiteness check.
+    /// Fixed particles move at their prescribed velocity; plane kinematics keep `z = 0`,
+    /// `v_z = 0`, `ω_x = ω_y = 0`. Runs after the contact passes of blocks `0..=c`.
+    fn gather(&self, c: usize, rows: GatherRows<'_>) {
+        let Range { start: s, end: e } = self.particles(c);
+        let (g, dt, alpha, planar, sparse) = (
+            self.gravity,
+            self.dt,
+            self.damping,
+            self.planar,
+            self.sparse,
+        );
+        let (b_start, b_entry) = (self.b_start, self.b_entry);
+        let (touched, stamp) = (self.touched, self.stamp);
+        // The spill entries of a particle of block `c` belong to contacts of earlier blocks,
+        // i.e. lie below `a_start[s]`, where the rows end.
+        let GatherRows {
+            position: xs,
+            velocity: vs,
+            angular_velocity: ws,
+            force: fs,
+            torque: ts,
+            block_force,
+            block_torque,
+            spill,
+        } = rows;
+        let mut bad = usize::MAX;
+        let ranges = b_start[s..=e]
+            .windows(2)
+            .zip(block_force.iter().zip(block_torque));
+        let loads = self.fixed[s..e].iter().zip(
+            self.external_force[s..e]
+                .iter()
+                .zip(&self.external_torque[s..e]),
+        );
+        for (
+            j,
+            (
+                ((((((x, v), w), f_out), t_out), (&m, &inertia)), (&fixed, (fe, te))),
+                (b_range, (f_block, t_block)),
+            ),
+        ) in xs
+            .iter_mut()
+            .zip(vs.iter_mut())
+            .zip(ws.iter_mut())
+            .zip(fs.iter_mut())
+            .zip(ts.iter_mut())
+            .zip(self.mass[s..e].iter().zip(&self.inertia[s..e]))
+            .zip(loads)
+            .zip(ranges)
+            .enumerate()
+        {
+            let i = s + j;
+            let mut fi = Vec3::ZERO;
+            let mut ti = Vec3::ZERO;
+            if !(sparse && touched[i].load(Relaxed) != stamp) {
+                // No test of the contact's activity: an inactive contact's spill entry is
+                // zero (see `spill`).
+                for &k in &b_entry[b_range[0] as usize..b_range[1] as usize] {
+                    let [f, t] = spill[k as usize];
+                    fi += f;
+                    ti += t;
+                }
+            }
+            fi += *f_block;
+            ti += *t_block;
+            *f_out = fi + *fe + g * m;
+            *t_out = ti + *te;
+            if !fixed {
+                let inv_m = 1.0 / m;
+                let inv_i = 1.0 / inertia;
+                let f = cundall_damping(*f_out, *v, dt * inv_m, alpha);
+                let t = cundall_damping(*t_out, *w, dt * inv_i, alpha);
+                *v += f * (dt * inv_m);
+                *w += t * (dt * inv_i);
+                if planar {
+                    v.z = 0.0;
+                    w.x = 0.0;
+                    w.y = 0.0;
+                }
+            }
+            *x += *v * dt;
+            if !all_finite(*x, *v, *w) {
+                bad = bad.min(i);
+            }
+        }
+        if bad != usize::MAX {
+            self.first_bad.fetch_min(bad, Relaxed);
+        }
     }
 }
 

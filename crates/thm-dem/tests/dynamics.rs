@@ -707,3 +707,37 @@ fn a_contact_across_particle_blocks_leaves_no_force_once_it_opens() {
     assert_eq!(state.particles.velocity[700], v_apart);
     assert_eq!(state.particles.force[700], Vec3::ZERO);
 }
+
+/// The contact pass of a block reads only the particles of its own and later blocks (the
+/// parallel schedule relies on it): a pair edited in place to point back into an earlier
+/// block (the contact index is not rebuilt, as nothing says the list changed) panics
+/// instead of racing with that block's integration, with one thread as with several.
+#[test]
+fn a_pair_edited_to_point_into_an_earlier_block_panics() {
+    for threads in [1, 2, 3] {
+        let p = jittered_lattice(Kinematics::Spheres3d, 12, 12, 12, 7, 0.5);
+        let mut state = DemState::new(p, Vec::new());
+        state.install_bonds(5e-5).unwrap();
+        let law = CohesiveFrictionalParams::paper_a_table_1()
+            .validate()
+            .unwrap();
+        let dt = 0.5 * critical_time_step(&state, &law);
+        let mut stepper = Stepper::new(law, stepper_params(dt, 0.08).validate().unwrap());
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| stepper.run(&mut state, 2)).unwrap();
+        let k = state
+            .contacts
+            .pair
+            .iter()
+            .position(|p| p[0] >= 1024)
+            .expect("a contact of a later block");
+        state.contacts.pair[k][1] = 0;
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            pool.install(|| stepper.step(&mut state))
+        }));
+        assert!(r.is_err(), "{threads} threads");
+    }
+}
