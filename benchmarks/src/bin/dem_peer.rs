@@ -157,6 +157,8 @@ fn run() -> Result<(), String> {
                 seconds,
                 builds,
                 kinetic_energy,
+                listed,
+                active,
             } = timed;
             println!(
                 "{n} {steps} {seconds:.6} {:.1}",
@@ -164,6 +166,7 @@ fn run() -> Result<(), String> {
             );
             println!("neighbour_builds {builds}");
             println!("kinetic_energy {kinetic_energy:.9e}");
+            println!("listed_pairs {listed} active_pairs {active}");
             if let Some((broken, free_kinetic_energy, top_force)) = pulled {
                 println!("broken_bonds {broken}");
                 println!("free_kinetic_energy {free_kinetic_energy:.9e}");
@@ -183,6 +186,9 @@ struct Timed {
     builds: u64,
     /// Total kinetic energy after the timed steps \[J\].
     kinetic_energy: f64,
+    /// Listed particle pairs and those that carried force in the last step.
+    listed: usize,
+    active: usize,
 }
 
 fn time_run<L: ContactLaw>(
@@ -208,6 +214,8 @@ fn time_run<L: ContactLaw>(
         seconds,
         builds: state.contact_generation - generation,
         kinetic_energy: state.particles.kinetic_energy(),
+        listed: state.contacts.len(),
+        active: state.contacts.active_count(),
     })
 }
 

@@ -44,6 +44,11 @@ const SPINS_BEFORE_YIELD: u32 = 1 << 8;
 /// machine, so that only a thread that lost its core waits longer.
 const MAX_WAIT: Duration = Duration::from_micros(150);
 
+/// Force and torque that a contact leaves for the gather of a later block (on its second
+/// particle). Aligned to a 64-byte cache line: writing or reading one touches one line.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct SpillEntry(pub [Vec3; 2]);
+
 /// The part of the contact pass's data that belongs to a run of whole blocks, split
 /// between blocks.
 pub(crate) trait BlockRun: Sized + Send {
@@ -111,18 +116,19 @@ impl<'a, T> Rows<'a, T> {
 }
 
 /// The slices that contacts and gathers share: the particles' kinematics (read by contacts,
-/// moved by gathers), resultant force and torque (written by gathers), block sums (written
-/// by a block's contact, read by its gather) and spill entries (written by the contact that
-/// owns them, read by the gathers of later blocks).
+/// moved by gathers), resultant force and torque (the block sums, written by a block's
+/// contact, then read and overwritten with the resultant by its gather) and spill entries
+/// with their contacts'
+/// activity flags (written by the contact that owns them, read by the gathers of later
+/// blocks).
 pub(crate) struct PassRows<'a> {
     position: Rows<'a, Vec3>,
     velocity: Rows<'a, Vec3>,
     angular_velocity: Rows<'a, Vec3>,
     force: Rows<'a, Vec3>,
     torque: Rows<'a, Vec3>,
-    block_force: Rows<'a, Vec3>,
-    block_torque: Rows<'a, Vec3>,
-    spill: Rows<'a, [Vec3; 2]>,
+    spill: Rows<'a, SpillEntry>,
+    active: Rows<'a, u8>,
 }
 
 impl<'a> PassRows<'a> {
@@ -134,9 +140,8 @@ impl<'a> PassRows<'a> {
         angular_velocity: &'a mut [Vec3],
         force: &'a mut [Vec3],
         torque: &'a mut [Vec3],
-        block_force: &'a mut [Vec3],
-        block_torque: &'a mut [Vec3],
-        spill: &'a mut [[Vec3; 2]],
+        spill: &'a mut [SpillEntry],
+        active: &'a mut [u8],
     ) -> Self {
         Self {
             position: Rows::new(position),
@@ -144,37 +149,38 @@ impl<'a> PassRows<'a> {
             angular_velocity: Rows::new(angular_velocity),
             force: Rows::new(force),
             torque: Rows::new(torque),
-            block_force: Rows::new(block_force),
-            block_torque: Rows::new(block_torque),
             spill: Rows::new(spill),
+            active: Rows::new(active),
         }
     }
 }
 
 /// What the contact of block `c` (particles `s..e`) sees: the kinematics of particles `s..n`
-/// (`position[0]` is particle `s`), its own spill entries and its block sums (`[0]` is
-/// particle `s`).
+/// (`position[0]` is particle `s`), its own spill entries and activity flags (`[0]` is its
+/// first contact) and its block sums, held in the force and torque rows of its particles
+/// (`[0]` is particle `s`).
 pub(crate) struct ContactRows<'r> {
     pub position: &'r [Vec3],
     pub velocity: &'r [Vec3],
     pub angular_velocity: &'r [Vec3],
-    pub spill: &'r mut [[Vec3; 2]],
+    pub spill: &'r mut [SpillEntry],
+    pub active: &'r mut [u8],
     pub block_force: &'r mut [Vec3],
     pub block_torque: &'r mut [Vec3],
 }
 
 /// What the gather of block `j` (particles `s..e`) sees: its particles' kinematics, force
-/// and torque, and its block sums (`[0]` is particle `s`, all writable but the block sums),
-/// and the spill entries of the contacts of blocks `0..j` (read-only).
+/// and torque (`[0]` is particle `s`, all writable; force and torque hold the block sums
+/// on entry), and the spill entries and activity flags of the contacts of blocks `0..j`
+/// (read-only).
 pub(crate) struct GatherRows<'r> {
     pub position: &'r mut [Vec3],
     pub velocity: &'r mut [Vec3],
     pub angular_velocity: &'r mut [Vec3],
     pub force: &'r mut [Vec3],
     pub torque: &'r mut [Vec3],
-    pub block_force: &'r [Vec3],
-    pub block_torque: &'r [Vec3],
-    pub spill: &'r [[Vec3; 2]],
+    pub spill: &'r [SpillEntry],
+    pub active: &'r [u8],
 }
 
 /// How the particles and spill entries fall into blocks: block `c` holds particles
@@ -311,14 +317,15 @@ impl Drop for AbortOnPanic<'_> {
 ///   happens before it (the schedule's mutex orders them); a contact's or gather's rows are
 ///   borrowed only for its call (`ContactRows<'r>`, `GatherRows<'r>` cannot outlive it);
 /// - contact `c` (particles `s_c..e_c`) borrows kinematics rows `s_c..n` read-only and its
-///   own block-sum rows `s_c..e_c` and spill rows `spill(c)` writable; gather `j` borrows
-///   particle and block-sum rows `s_j..e_j` (kinematics, force and torque writable, block
-///   sums read-only) and spill rows `0..spill_start[s_j]` read-only;
+///   own force and torque rows `s_c..e_c` (its block sums) and spill and activity rows
+///   `spill(c)` writable; gather `j` borrows particle rows `s_j..e_j` (kinematics, force and
+///   torque) writable and spill and activity rows `0..spill_start[s_j]` read-only;
 /// - while gather `j` runs, every contact still running has `c > j`, so `s_c >= e_j` (its
-///   kinematics rows lie above block `j`, its block sums are its own) and, `spill_start`
-///   being nondecreasing at block boundaries (checked on entry), its spill rows start at
-///   `spill_start[s_c] >= spill_start[s_j]`; contacts borrow pairwise disjoint block-sum and
-///   spill rows, gathers pairwise disjoint particle rows.
+///   kinematics, force and torque rows lie above block `j`) and, `spill_start`
+///   being nondecreasing at block boundaries (checked on entry), its spill and activity
+///   rows start at `spill_start[s_c] >= spill_start[s_j]`; contacts borrow pairwise
+///   disjoint force, torque, spill and activity rows, gathers pairwise disjoint particle
+///   rows.
 ///
 /// So no row is written while another borrow of it is alive.
 #[allow(clippy::too_many_arguments)]
@@ -346,8 +353,9 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
                 velocity: rows.velocity.rows(p.start..n),
                 angular_velocity: rows.angular_velocity.rows(p.start..n),
                 spill: rows.spill.rows_mut(layout.spill(c)),
-                block_force: rows.block_force.rows_mut(p.clone()),
-                block_torque: rows.block_torque.rows_mut(p),
+                active: rows.active.rows_mut(layout.spill(c)),
+                block_force: rows.force.rows_mut(p.clone()),
+                block_torque: rows.torque.rows_mut(p),
             }
         };
         contact(c, data, r);
@@ -362,10 +370,9 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
                 velocity: rows.velocity.rows_mut(p.clone()),
                 angular_velocity: rows.angular_velocity.rows_mut(p.clone()),
                 force: rows.force.rows_mut(p.clone()),
-                torque: rows.torque.rows_mut(p.clone()),
-                block_force: rows.block_force.rows(p.clone()),
-                block_torque: rows.block_torque.rows(p),
+                torque: rows.torque.rows_mut(p),
                 spill: rows.spill.rows(0..below),
+                active: rows.active.rows(0..below),
             }
         };
         gather(j, r);
@@ -500,8 +507,8 @@ mod tests {
     /// Arrays for `n` particles, one spill entry per particle.
     struct Arrays {
         kin: [Vec<Vec3>; 5],
-        sums: [Vec<Vec3>; 2],
-        spill: Vec<[Vec3; 2]>,
+        spill: Vec<SpillEntry>,
+        active: Vec<u8>,
         spill_start: Vec<u32>,
     }
 
@@ -510,15 +517,14 @@ mod tests {
             let z = || vec![Vec3::ZERO; n];
             Self {
                 kin: [z(), z(), z(), z(), z()],
-                sums: [z(), z()],
-                spill: vec![[Vec3::ZERO; 2]; n],
+                spill: vec![SpillEntry::default(); n],
+                active: vec![0; n],
                 spill_start: (0..=n as u32).collect(),
             }
         }
 
         fn rows(&mut self) -> (Layout<'_>, PassRows<'_>) {
             let [x, v, w, f, t] = &mut self.kin;
-            let [bf, bt] = &mut self.sums;
             let layout = Layout {
                 n: x.len(),
                 block: BLOCK_LEN,
@@ -526,7 +532,7 @@ mod tests {
             };
             (
                 layout,
-                PassRows::new(x, v, w, f, t, bf, bt, &mut self.spill),
+                PassRows::new(x, v, w, f, t, &mut self.spill, &mut self.active),
             )
         }
     }
@@ -558,9 +564,16 @@ mod tests {
                     for (j, x) in s.iter_mut().enumerate() {
                         *x = (c * BLOCK_LEN + j) as u64 + 1;
                     }
-                    for (f, sp) in r.block_force.iter_mut().zip(r.spill.iter_mut()) {
+                    assert_eq!(r.active.len(), r.spill.len());
+                    for ((f, sp), on) in r
+                        .block_force
+                        .iter_mut()
+                        .zip(r.spill.iter_mut())
+                        .zip(r.active.iter_mut())
+                    {
                         *f = Vec3::new(c as f64, 0.0, 0.0);
-                        sp[0] = Vec3::new(c as f64 + 1.0, 0.0, 0.0);
+                        sp.0[0] = Vec3::new(c as f64 + 1.0, 0.0, 0.0);
+                        *on = (c % 251) as u8 + 1;
                     }
                     assert_eq!(seen[c].fetch_add(1, Ordering::Relaxed), 0);
                 },
@@ -569,12 +582,14 @@ mod tests {
                         assert_eq!(s.load(Ordering::Relaxed), 1, "gather {j} too early");
                     }
                     assert_eq!(r.spill.len(), j * BLOCK_LEN);
-                    for (k, sp) in r.spill.iter().enumerate() {
-                        assert_eq!(sp[0].x, (k / BLOCK_LEN) as f64 + 1.0);
+                    for (k, (sp, on)) in r.spill.iter().zip(r.active).enumerate() {
+                        assert_eq!(sp.0[0].x, (k / BLOCK_LEN) as f64 + 1.0);
+                        assert_eq!(*on, ((k / BLOCK_LEN) % 251) as u8 + 1);
                     }
-                    for (x, f) in r.position.iter_mut().zip(r.block_force) {
+                    for (x, f) in r.position.iter_mut().zip(r.force.iter_mut()) {
                         assert_eq!(f.x, j as f64);
                         x.x += 1.0;
+                        f.x = -1.0;
                     }
                     assert_eq!(gathered[j].fetch_add(1, Ordering::Relaxed), 0);
                 },
@@ -584,6 +599,7 @@ mod tests {
         assert_eq!(own, want, "{threads} {parallel} {len}");
         assert!(gathered.iter().all(|g| g.load(Ordering::Relaxed) == 1));
         assert!(arrays.kin[0].iter().all(|x| x.x == 1.0));
+        assert!(arrays.kin[3].iter().all(|f| f.x == -1.0));
     }
 
     #[test]

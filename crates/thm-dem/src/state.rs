@@ -494,9 +494,10 @@ pub struct DemState {
     /// Wall points at the last neighbour search.
     pub search_reference_wall_point: Vec<Vec3>,
     /// Incremented whenever the contact lists change membership (a stepper rebuilds its
-    /// per-particle contact index when it sees a new value). A caller that edits the
-    /// `reference_penetration` or the shear force of a contact that is not bonded and does not
-    /// touch increments it too, so that the stepper looks at every listed pair again.
+    /// per-particle contact index when it sees a new value). A caller that edits a contact's
+    /// history in place (its bond state, `reference_penetration` or shear force) increments
+    /// it too, so that the stepper looks at every listed pair again: a stepper does not read
+    /// the history of a pair it has proven apart and found unbonded and without shear.
     pub contact_generation: u64,
 }
 

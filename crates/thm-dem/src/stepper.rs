@@ -7,20 +7,25 @@
 //!    fixed by the index, never by the thread count) in parallel: a block owns the contacts
 //!    whose first particle it holds (a range of the sorted list) and its particles' wall
 //!    contacts; each contact writes only its own history, report and "carried force" flag;
-//!    the block sums the forces and torques on its own particles in contact order, and a
-//!    contact whose second particle lies in a later block leaves that particle's share in
-//!    the contact's spill entry and stamps the particle (every stamp of a step is the same
-//!    value); a listed pair that does not touch (and is neither bonded nor sheared) costs one
-//!    distance, and is not looked at again until the drift since then could have closed its
-//!    gap (a block sweeps its contacts in chunks of 64: it first lists, without a branch,
-//!    those that are not such quiet pairs, then evaluates the listed ones in contact order);
-//!    reports whether a bond broke (a boolean OR);
+//!    the block sums the forces and torques on its own particles in contact order (in the
+//!    particles' force and torque rows, which the gather then overwrites with the
+//!    resultants), and a contact whose second particle lies in a later block leaves that
+//!    particle's share in the contact's spill entry and stamps the particle (every stamp of
+//!    a step is the same value); a listed pair that does not touch (and is neither bonded
+//!    nor sheared) costs one distance, and is not looked at again, not even its history,
+//!    until the drift since then could have closed its gap (a block sweeps its contacts in
+//!    chunks of 64: it first lists, without a branch, those that are not such quiet pairs,
+//!    then evaluates the listed ones in contact order); these bounds are forgotten when the
+//!    state is not the one the stepper advanced last (taken back from a save) or the
+//!    contact generation changed (see [`DemState::contact_generation`]); reports whether a
+//!    bond broke (a boolean OR);
 //! 3. gather and integrate, block by block, in the same parallel region as stage 2: the
 //!    gather of a block runs once the contact passes of its own and every earlier block are
 //!    done (a block's contacts read only the particles of its own and later blocks; see
 //!    `blocks.rs` for the schedule): every particle sums the spill entries of its contacts
-//!    with earlier blocks in contact-index order (those that carried force; when at most a
-//!    quarter of the contacts did in the previous step, only the stamped particles look),
+//!    with earlier blocks in contact-index order (those that carried force, chosen by their
+//!    flags without a branch, the others adding +0; when at most a quarter of the contacts
+//!    did in the previous step, only the stamped particles look),
 //!    then adds its block's sum, external force and gravity (no floating-point atomics: the
 //!    same bits for any thread count), then Cundall's non-viscous damping (A-Eq. 7) and
 //!    leapfrog, with the finiteness check (the first bad particle is a minimum over indices);
@@ -34,7 +39,7 @@
 //! through memory a second time.
 
 use crate::blocks::{
-    BlockRun, ContactRows, GatherRows, Layout, PassRows, Stages, contacts_then_gathers,
+    BlockRun, ContactRows, GatherRows, Layout, PassRows, SpillEntry, Stages, contacts_then_gathers,
 };
 use crate::contact::{
     BondState, ContactHistory, ContactKinematics, ContactLaw, ContactReport, PairInput,
@@ -45,6 +50,7 @@ use crate::state::{BondBreak, ContactList, DemState, ParticleState, Wall};
 use crate::vec3::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::hint::select_unpredictable;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering::Relaxed};
 
@@ -119,19 +125,14 @@ pub struct Stepper<L: ContactLaw> {
     wall_start: Vec<u32>,
     cursor: Vec<u32>,
     index_key: Option<(u64, usize, usize, usize)>,
-    /// Whether each contact carried force at its last evaluation (the report's `active` flag
-    /// again, one byte per contact): the contact pass zeroes a contact's spill entry when it
-    /// stops carrying force.
+    /// Whether each contact carries force in this step (the report's `active` flag again, one
+    /// byte per contact, written for every contact by every contact pass): the gather reads a
+    /// spill entry only when its contact's flag is set.
     active: Vec<u8>,
     /// Force on B and torque on B of a contact whose B lies in a later block than its A,
-    /// written in the step when it carried force and zeroed when it stops carrying force (and
-    /// all zeroed when the contact index is rebuilt), so that the gather adds every entry
-    /// without testing `active`: an inactive contact's entry is zero.
-    spill: Vec<[Vec3; 2]>,
-    /// Per particle: the sum of the forces (torques) of the contacts that its block owns, in
-    /// contact order (see [`BlockPass::block`]).
-    block_force: Vec<Vec3>,
-    block_torque: Vec<Vec3>,
+    /// written in every step in which it carries force; stale otherwise (the gather then
+    /// adds zero instead, see `active`).
+    spill: Vec<SpillEntry>,
     /// `touched[i] == stamp` when a contact of an earlier block left particle `i` a spill
     /// entry in this step, stored by the contact pass itself (used only when few contacts
     /// carried force: the gather then reads spill entries only for stamped particles). Every
@@ -141,11 +142,17 @@ pub struct Stepper<L: ContactLaw> {
     touched: Vec<AtomicU32>,
     stamp: u32,
     /// A listed pair found apart (and unbonded, without shear) stays apart while the drift
-    /// (see [`Drift`]) is below its entry: it is not looked at again until then.
+    /// (see [`Drift`]) is below its entry: it is not looked at again until then, not even its
+    /// history (which the contract of [`DemState::contact_generation`] keeps unedited).
     quiet_below: Vec<f64>,
+    /// The step index of the state after this stepper's last successful step: a state at
+    /// another step (taken back from a save, or another state) has every listed pair looked
+    /// at again, since a bond intact in it may be broken in the state the bounds came from.
+    advanced_to: Option<u64>,
     /// Whether the gather reads spill entries only for stamped particles: set when at most
     /// a quarter of the contacts carried force in the previous step. Only the speed depends
-    /// on it: a particle that no contact stamped has zero spill entries only.
+    /// on it: a particle that no contact stamped has no contact with an earlier block that
+    /// carries force.
     sparse: bool,
     /// Scratch of the contact-and-gather schedule.
     stages: Stages,
@@ -162,6 +169,9 @@ struct Drift {
     /// closes by at most `2 (D(t) + D(t₀))`.
     pair: f64,
 }
+
+/// What an inactive contact adds in the gather.
+const NO_LOAD: SpillEntry = SpillEntry([Vec3::ZERO; 2]);
 
 /// Particles per block of the contact pass and of the per-particle passes: blocks are fixed
 /// by the index, not by the thread count (the order of every sum, and so every bit, depends
@@ -191,11 +201,10 @@ impl<L: ContactLaw> Stepper<L> {
             index_key: None,
             active: Vec::new(),
             spill: Vec::new(),
-            block_force: Vec::new(),
-            block_torque: Vec::new(),
             touched: Vec::new(),
             stamp: 0,
             quiet_below: Vec::new(),
+            advanced_to: None,
             sparse: false,
             stages: Stages::default(),
         }
@@ -220,6 +229,9 @@ impl<L: ContactLaw> Stepper<L> {
     /// One time step. Runs in the current rayon pool; the result does not depend on its size.
     pub fn step(&mut self, state: &mut DemState) -> Result<(), DemError> {
         let drift = self.update_neighbours(state)?;
+        if self.advanced_to.take() != Some(state.step) {
+            self.quiet_below.fill(f64::NEG_INFINITY);
+        }
         self.next_stamp(state.particles.len());
         let (any_broke, active_count, first_bad) = self.forces_and_motion(state, drift);
         // Few contacts carried force: the next step's gather visits only the stamped
@@ -239,6 +251,7 @@ impl<L: ContactLaw> Stepper<L> {
         }
         state.step += 1;
         state.time += dt;
+        self.advanced_to = Some(state.step);
         Ok(())
     }
 
@@ -372,9 +385,10 @@ impl<L: ContactLaw> Stepper<L> {
             entry[cursor[b] as usize] = k as u32;
             cursor[b] += 1;
         }
-        // The entries follow the new contact indices: none carries an old force.
-        self.spill.clear();
-        self.spill.resize(state.contacts.len(), [Vec3::ZERO; 2]);
+        // The entries follow the new contact indices (each is read only in a step that wrote
+        // it, see `active`).
+        self.spill
+            .resize(state.contacts.len(), SpillEntry::default());
         // Every pair is looked at in the next step.
         self.quiet_below.clear();
         self.quiet_below
@@ -410,9 +424,7 @@ impl<L: ContactLaw> Stepper<L> {
             ..
         } = state;
         self.active.resize(contacts.len(), 0);
-        self.spill.resize(contacts.len(), [Vec3::ZERO; 2]);
-        self.block_force.resize(n, Vec3::ZERO);
-        self.block_torque.resize(n, Vec3::ZERO);
+        self.spill.resize(contacts.len(), SpillEntry::default());
         let ParticleState {
             kinematics,
             position,
@@ -465,7 +477,6 @@ impl<L: ContactLaw> Stepper<L> {
             pair: &contacts.pair,
             history: &mut contacts.history,
             report: &mut contacts.report,
-            active: &mut self.active,
             quiet: &mut self.quiet_below,
             wall_pair: &wall_contacts.pair,
             wall_history: &mut wall_contacts.history,
@@ -483,9 +494,8 @@ impl<L: ContactLaw> Stepper<L> {
             angular_velocity,
             force,
             torque,
-            &mut self.block_force,
-            &mut self.block_torque,
             &mut self.spill,
+            &mut self.active,
         );
         contacts_then_gathers(
             layout,
@@ -570,7 +580,6 @@ struct BlockSlices<'a> {
     pair: &'a [[u32; 2]],
     history: &'a mut [ContactHistory],
     report: &'a mut [ContactReport],
-    active: &'a mut [u8],
     quiet: &'a mut [f64],
     wall_pair: &'a [[u32; 2]],
     wall_history: &'a mut [ContactHistory],
@@ -583,7 +592,6 @@ impl<'a> BlockSlices<'a> {
         let (pair, pair_rest) = self.pair.split_at(c);
         let (history, history_rest) = self.history.split_at_mut(c);
         let (report, report_rest) = self.report.split_at_mut(c);
-        let (active, active_rest) = self.active.split_at_mut(c);
         let (quiet, quiet_rest) = self.quiet.split_at_mut(c);
         let (wall_pair, wall_pair_rest) = self.wall_pair.split_at(w);
         let (wall_history, wall_history_rest) = self.wall_history.split_at_mut(w);
@@ -595,7 +603,6 @@ impl<'a> BlockSlices<'a> {
                 pair,
                 history,
                 report,
-                active,
                 quiet,
                 wall_pair,
                 wall_history,
@@ -606,7 +613,6 @@ impl<'a> BlockSlices<'a> {
                 pair: pair_rest,
                 history: history_rest,
                 report: report_rest,
-                active: active_rest,
                 quiet: quiet_rest,
                 wall_pair: wall_pair_rest,
                 wall_history: wall_history_rest,
@@ -673,7 +679,6 @@ impl<L: ContactLaw> BlockPass<'_, L> {
             pair,
             history,
             report,
-            active,
             quiet,
             wall_pair,
             wall_history,
@@ -685,6 +690,7 @@ impl<L: ContactLaw> BlockPass<'_, L> {
             velocity: v,
             angular_velocity: w,
             spill,
+            active,
             block_force: force,
             block_torque: torque,
         } = rows;
@@ -695,27 +701,23 @@ impl<L: ContactLaw> BlockPass<'_, L> {
         let (mut broke, mut count) = (false, 0);
         // Chunk by chunk of `LIVE_CHUNK` contacts (small enough that the chunk's histories
         // are still in L1 when evaluated): first list the contacts that are not quiet, i.e.
-        // not proven apart since they were last looked at (below) with the history still
-        // the cleared one (any evaluation sets the normal; a bond installed meanwhile or a
-        // restored state is seen at once), by a store that is kept or overwritten instead of
-        // a branch (which contacts are quiet follows no pattern a branch predictor could
-        // learn); a quiet contact only drops its spill entry if it still carried force.
-        // Then evaluate those in contact order (the block sums' order is unchanged: a quiet
-        // contact adds nothing).
+        // not proven apart since they were last looked at (below), by a store that is kept or
+        // overwritten instead of a branch (which contacts are quiet follows no pattern a
+        // branch predictor could learn). Only the bounds are read: a quiet contact's history
+        // is the cleared one and its activity flag is 0, as the evaluation that found it
+        // apart left them (the bounds are reset when the index is rebuilt, when the state is
+        // not the one this stepper advanced last, and a caller that edits a history
+        // increments the contact generation). Then evaluate those in contact order (the
+        // block sums' order is unchanged: a quiet contact adds nothing).
         let mut live = [0_u8; LIVE_CHUNK];
         for base in (0..pair.len()).step_by(LIVE_CHUNK) {
             let end = (base + LIVE_CHUNK).min(pair.len());
             let mut m = 0;
-            for k in base..end {
-                let (h, q) = (&history[k], quiet[k]);
-                let is_quiet = (drift < q) & (h.bond != BondState::Intact) & is_zero(h.normal);
+            for (k, &q) in quiet.iter().enumerate().take(end).skip(base) {
                 // `m <= k - base < LIVE_CHUNK <= 256`: stored always, kept when live.
                 live[m] = (k - base) as u8;
+                let is_quiet = drift < q;
                 m += usize::from(!is_quiet);
-                if is_quiet & (active[k] != 0) {
-                    spill[k] = [Vec3::ZERO; 2];
-                    active[k] = 0;
-                }
             }
             for &j in &live[..m] {
                 let k = base + usize::from(j);
@@ -746,9 +748,6 @@ impl<L: ContactLaw> BlockPass<'_, L> {
                         if reach > 0.0 {
                             *q = 0.5 * (d2.sqrt() - reach - 1e-9 * reach) - drift;
                         }
-                        if *on != 0 {
-                            *sp = [Vec3::ZERO; 2];
-                        }
                         *on = 0;
                         continue;
                     }
@@ -764,9 +763,6 @@ impl<L: ContactLaw> BlockPass<'_, L> {
                 };
                 let r = self.law.respond(&input, &kin, h);
                 *rep = ContactReport::from(&r);
-                if *on != 0 && !r.active {
-                    *sp = [Vec3::ZERO; 2];
-                }
                 *on = u8::from(r.active);
                 broke |= r.broke.is_some();
                 if r.active {
@@ -777,7 +773,11 @@ impl<L: ContactLaw> BlockPass<'_, L> {
                         force[b - s] += r.force_on_b;
                         torque[b - s] += r.torque_on_b;
                     } else {
-                        *sp = [r.force_on_b, r.torque_on_b];
+                        // Component by component: a whole-entry copy went through the
+                        // stack with mixed widths, and the loads of a copy spanning two
+                        // stores wait for them.
+                        sp.0[0] = r.force_on_b;
+                        sp.0[1] = r.torque_on_b;
                         self.touched[b].store(self.stamp, Relaxed);
                     }
                 }
@@ -853,67 +853,69 @@ impl<L: ContactLaw> BlockPass<'_, L> {
             angular_velocity: ws,
             force: fs,
             torque: ts,
-            block_force,
-            block_torque,
             spill,
+            active,
         } = rows;
         let mut bad = usize::MAX;
-        let ranges = b_start[s..=e]
-            .windows(2)
-            .zip(block_force.iter().zip(block_torque));
+        let ranges = b_start[s..=e].windows(2);
         let loads = self.fixed[s..e].iter().zip(
             self.external_force[s..e]
                 .iter()
                 .zip(&self.external_torque[s..e]),
         );
-        for (
-            j,
-            (
-                ((((((x, v), w), f_out), t_out), (&m, &inertia)), (&fixed, (fe, te))),
-                (b_range, (f_block, t_block)),
-            ),
-        ) in xs
-            .iter_mut()
-            .zip(vs.iter_mut())
-            .zip(ws.iter_mut())
-            .zip(fs.iter_mut())
-            .zip(ts.iter_mut())
-            .zip(self.mass[s..e].iter().zip(&self.inertia[s..e]))
-            .zip(loads)
-            .zip(ranges)
-            .enumerate()
+        for (j, (((((((x, v), w), f_out), t_out), (&m, &inertia)), (&fixed, (fe, te))), b_range)) in
+            xs.iter_mut()
+                .zip(vs.iter_mut())
+                .zip(ws.iter_mut())
+                .zip(fs.iter_mut())
+                .zip(ts.iter_mut())
+                .zip(self.mass[s..e].iter().zip(&self.inertia[s..e]))
+                .zip(loads)
+                .zip(ranges)
+                .enumerate()
         {
             let i = s + j;
             let mut fi = Vec3::ZERO;
             let mut ti = Vec3::ZERO;
             if !(sparse && touched[i].load(Relaxed) != stamp) {
-                // No test of the contact's activity: an inactive contact's spill entry is
-                // zero (see `spill`).
+                // An inactive contact adds +0 (which changes no bit of a sum that starts at
+                // +0), chosen without a branch (which contacts carry force follows no pattern)
+                // and without reading its stale spill entry.
                 for &k in &b_entry[b_range[0] as usize..b_range[1] as usize] {
-                    let [f, t] = spill[k as usize];
+                    let k = k as usize;
+                    let SpillEntry([f, t]) =
+                        *select_unpredictable(active[k] != 0, &spill[k], &NO_LOAD);
                     fi += f;
                     ti += t;
                 }
             }
-            fi += *f_block;
-            ti += *t_block;
-            *f_out = fi + *fe + g * m;
-            *t_out = ti + *te;
+            // The block sums (see `BlockPass::block`) are in the output rows until here.
+            fi += *f_out;
+            ti += *t_out;
+            let (f_total, t_total) = (fi + *fe + g * m, ti + *te);
+            *f_out = f_total;
+            *t_out = t_total;
+            // Updated in registers and stored once: the finiteness check must not read back
+            // components just stored one by one (a load spanning two stores waits for them).
+            let (mut vi, mut wi) = (*v, *w);
             if !fixed {
                 let inv_m = 1.0 / m;
                 let inv_i = 1.0 / inertia;
-                let f = cundall_damping(*f_out, *v, dt * inv_m, alpha);
-                let t = cundall_damping(*t_out, *w, dt * inv_i, alpha);
-                *v += f * (dt * inv_m);
-                *w += t * (dt * inv_i);
+                let f = cundall_damping(f_total, vi, dt * inv_m, alpha);
+                let t = cundall_damping(t_total, wi, dt * inv_i, alpha);
+                vi += f * (dt * inv_m);
+                wi += t * (dt * inv_i);
                 if planar {
-                    v.z = 0.0;
-                    w.x = 0.0;
-                    w.y = 0.0;
+                    vi.z = 0.0;
+                    wi.x = 0.0;
+                    wi.y = 0.0;
                 }
             }
-            *x += *v * dt;
-            if !all_finite(*x, *v, *w) {
+            let xi = *x + vi * dt;
+            *v = vi;
+            *w = wi;
+            *x = xi;
+            if !all_finite(xi, vi, wi) {
                 bad = bad.min(i);
             }
         }

@@ -572,6 +572,54 @@ fn a_stepper_carries_nothing_from_one_state_to_another() {
     assert_eq!(again, first);
 }
 
+/// Taken back to a state in which a bond is still intact, a stepper that has since seen the
+/// bond break and the pair open (and so holds a bound that says the pair stays apart for a
+/// while) evaluates the bond again: the run gives the bits of a fresh stepper. Two spheres
+/// on grips pulled apart; a neighbour search while the bond is stretched makes the opened
+/// pair's bound exceed the drift of the saved state (same contact generation).
+#[test]
+fn a_stepper_taken_back_before_a_break_evaluates_the_bond_again() {
+    let (ra, rb) = (1.5e-3, 2.5e-3);
+    let mut state = DemState::new(two_spheres(Kinematics::Spheres3d, ra, rb, 2e-6), vec![]);
+    assert_eq!(state.install_bonds(1e-5).unwrap(), 1);
+    let v = 1e-3;
+    state.particles.fixed = vec![true, true];
+    state.particles.velocity[0] = Vec3::new(-v, 0.0, 0.0);
+    state.particles.velocity[1] = Vec3::new(v, 0.0, 0.0);
+    let law = table1();
+    // The bond breaks at a stretch of T R²/K_n ≈ 1.07e-5 m (53 500 steps); a search every
+    // 50 000 steps (half the skin over the grip speed).
+    let config = StepperParams {
+        verlet_skin: 1e-5,
+        ..stepper_params(1e-7, 0.0)
+    }
+    .validate()
+    .unwrap();
+    let mut stepper = Stepper::new(law, config);
+    stepper.step(&mut state).unwrap();
+    let first_search = state.contact_generation;
+    while state.contact_generation == first_search {
+        stepper.step(&mut state).unwrap();
+    }
+    stepper.run(&mut state, 10).unwrap();
+    let saved = state.clone();
+    assert!(saved.bond_breaks.is_empty() && saved.contacts.report[0].normal_force < -30.0);
+    while state.bond_breaks.is_empty() {
+        stepper.step(&mut state).unwrap();
+        assert!(state.step < 90_000);
+    }
+    stepper.run(&mut state, 1000).unwrap();
+    assert!(!state.contacts.report[0].active);
+    assert_eq!(state.contact_generation, saved.contact_generation);
+    let steps = state.step - saved.step;
+    let mut again = saved.clone();
+    stepper.run(&mut again, steps).unwrap();
+    let mut first = saved.clone();
+    Stepper::new(law, config).run(&mut first, steps).unwrap();
+    assert_eq!(first.bond_breaks.len(), 1);
+    assert_eq!(again, first);
+}
+
 /// An 8 × 8 × 12 jittered lattice of spheres above a floor, with a linear spring + Coulomb law
 /// (the setting of the Verlet-skin and stepper-reuse tests). 768 spheres: two blocks of the
 /// contact pass (512 and 256), so that the contacts across the block boundary go through
