@@ -9,6 +9,8 @@
 #
 #   SIZES="10000 100000" benchmarks/peers/liggghts/run.sh [STEPS=2000] [ROUNDS=3]
 #   LOAD_MAX=0.05 REPEATS=3 KEEP_WORK=1 as in ../common.sh
+#   BED_DIR=DIR: take DIR/bedN.csv when it exists (written before by `dem_peer write-bed`;
+#   the 100 000-sphere bed takes 15 CPU minutes to settle) instead of settling it again
 set -euo pipefail
 SUDO=$([ "$(id -u)" = 0 ] || echo sudo)
 as_root=()
@@ -42,7 +44,11 @@ show() {
 }
 
 for n in ${SIZES:-10000 100000}; do
-  "$peer" write-bed "$work/bed$n.csv" "$n"
+  if [ -n "${BED_DIR:-}" ] && [ -f "$BED_DIR/bed$n.csv" ]; then
+    cp "$BED_DIR/bed$n.csv" "$work/bed$n.csv"
+  else
+    "$peer" write-bed "$work/bed$n.csv" "$n"
+  fi
   python3 "$here/csv_to_data.py" "$work/bed$n.csv" 2500 "$work/bed$n.data"
   atoms=$(grep -c '^particle' "$work/bed$n.csv")
   for p in 1 2; do

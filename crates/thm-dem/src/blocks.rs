@@ -129,6 +129,7 @@ pub(crate) struct PassRows<'a> {
     torque: Rows<'a, Vec3>,
     spill: Rows<'a, SpillEntry>,
     active: Rows<'a, u8>,
+    foreign: Rows<'a, SpillEntry>,
 }
 
 impl<'a> PassRows<'a> {
@@ -142,6 +143,7 @@ impl<'a> PassRows<'a> {
         torque: &'a mut [Vec3],
         spill: &'a mut [SpillEntry],
         active: &'a mut [u8],
+        foreign: &'a mut [SpillEntry],
     ) -> Self {
         Self {
             position: Rows::new(position),
@@ -151,6 +153,7 @@ impl<'a> PassRows<'a> {
             torque: Rows::new(torque),
             spill: Rows::new(spill),
             active: Rows::new(active),
+            foreign: Rows::new(foreign),
         }
     }
 }
@@ -165,6 +168,10 @@ pub(crate) struct ContactRows<'r> {
     pub angular_velocity: &'r [Vec3],
     pub spill: &'r mut [SpillEntry],
     pub active: &'r mut [u8],
+    /// On one thread only (else `None`): the sums of the contacts of earlier blocks on
+    /// particles `s..n`, to which the contact adds those on its later blocks' particles in
+    /// contact order instead of leaving spill entries (`[0]` is particle `s`).
+    pub foreign: Option<&'r mut [SpillEntry]>,
     pub block_force: &'r mut [Vec3],
     pub block_torque: &'r mut [Vec3],
 }
@@ -181,6 +188,9 @@ pub(crate) struct GatherRows<'r> {
     pub torque: &'r mut [Vec3],
     pub spill: &'r [SpillEntry],
     pub active: &'r [u8],
+    /// On one thread only (else `None`): the sums of the contacts of earlier blocks on the
+    /// block's particles (see [`ContactRows::foreign`]), which the gather reads and clears.
+    pub foreign: Option<&'r mut [SpillEntry]>,
 }
 
 /// How the particles and spill entries fall into blocks: block `c` holds particles
@@ -327,6 +337,10 @@ impl Drop for AbortOnPanic<'_> {
 ///   disjoint force, torque, spill and activity rows, gathers pairwise disjoint particle
 ///   rows.
 ///
+/// - on one thread only (no other thread runs a contact or a gather), contact `c` also
+///   borrows the per-particle rows `s_c..n` of the foreign sums writable, and gather `j`
+///   rows `s_j..e_j`; one runs after the other on that thread;
+///
 /// So no row is written while another borrow of it is alive.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn contacts_then_gathers<S: BlockRun>(
@@ -344,7 +358,7 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
         "spill entries out of block order"
     );
     let n = layout.n;
-    let contact = |c: usize, data: S| {
+    let contact = |c: usize, data: S, serial: bool| {
         let p = layout.particles(c);
         // SAFETY: the rows of contact `c` (see above).
         let r = unsafe {
@@ -354,13 +368,14 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
                 angular_velocity: rows.angular_velocity.rows(p.start..n),
                 spill: rows.spill.rows_mut(layout.spill(c)),
                 active: rows.active.rows_mut(layout.spill(c)),
+                foreign: serial.then(|| rows.foreign.rows_mut(p.start..n)),
                 block_force: rows.force.rows_mut(p.clone()),
                 block_torque: rows.torque.rows_mut(p),
             }
         };
         contact(c, data, r);
     };
-    let gather = |j: usize| {
+    let gather = |j: usize, serial: bool| {
         let p = layout.particles(j);
         let below = layout.spill_start[p.start] as usize;
         // SAFETY: the rows of gather `j` (see above).
@@ -370,9 +385,10 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
                 velocity: rows.velocity.rows_mut(p.clone()),
                 angular_velocity: rows.angular_velocity.rows_mut(p.clone()),
                 force: rows.force.rows_mut(p.clone()),
-                torque: rows.torque.rows_mut(p),
+                torque: rows.torque.rows_mut(p.clone()),
                 spill: rows.spill.rows(0..below),
                 active: rows.active.rows(0..below),
+                foreign: serial.then(|| rows.foreign.rows_mut(p)),
             }
         };
         gather(j, r);
@@ -387,8 +403,8 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
         // In order on this thread: contact c, then gather c (contacts 0..=c are done).
         let mut rest = Some((0..blocks, data));
         while let Some((c, block)) = take_front(&mut rest) {
-            contact(c, block);
-            gather(c);
+            contact(c, block, true);
+            gather(c, true);
         }
         return;
     }
@@ -415,12 +431,12 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
             job = match job {
                 Job::Contact(c, block) => {
                     waiter = Waiter::default();
-                    contact(c, block);
+                    contact(c, block, false);
                     lock().contact_done(c)
                 }
                 Job::Gather(j) => {
                     waiter = Waiter::default();
-                    gather(j);
+                    gather(j, false);
                     gathers_done.fetch_add(1, Ordering::Release);
                     lock().next_job()
                 }
@@ -509,6 +525,7 @@ mod tests {
         kin: [Vec<Vec3>; 5],
         spill: Vec<SpillEntry>,
         active: Vec<u8>,
+        foreign: Vec<SpillEntry>,
         spill_start: Vec<u32>,
     }
 
@@ -519,6 +536,7 @@ mod tests {
                 kin: [z(), z(), z(), z(), z()],
                 spill: vec![SpillEntry::default(); n],
                 active: vec![0; n],
+                foreign: vec![SpillEntry::default(); n],
                 spill_start: (0..=n as u32).collect(),
             }
         }
@@ -532,7 +550,16 @@ mod tests {
             };
             (
                 layout,
-                PassRows::new(x, v, w, f, t, &mut self.spill, &mut self.active),
+                PassRows::new(
+                    x,
+                    v,
+                    w,
+                    f,
+                    t,
+                    &mut self.spill,
+                    &mut self.active,
+                    &mut self.foreign,
+                ),
             )
         }
     }
@@ -565,6 +592,11 @@ mod tests {
                         *x = (c * BLOCK_LEN + j) as u64 + 1;
                     }
                     assert_eq!(r.active.len(), r.spill.len());
+                    let serial = threads == 1 || !parallel || blocks == 1;
+                    assert_eq!(
+                        r.foreign.map(|f| f.len()),
+                        serial.then_some(r.position.len())
+                    );
                     for ((f, sp), on) in r
                         .block_force
                         .iter_mut()
@@ -582,6 +614,11 @@ mod tests {
                         assert_eq!(s.load(Ordering::Relaxed), 1, "gather {j} too early");
                     }
                     assert_eq!(r.spill.len(), j * BLOCK_LEN);
+                    let serial = threads == 1 || !parallel || blocks == 1;
+                    assert_eq!(
+                        r.foreign.map(|f| f.len()),
+                        serial.then_some(r.position.len())
+                    );
                     for (k, (sp, on)) in r.spill.iter().zip(r.active).enumerate() {
                         assert_eq!(sp.0[0].x, (k / BLOCK_LEN) as f64 + 1.0);
                         assert_eq!(*on, ((k / BLOCK_LEN) % 251) as u8 + 1);

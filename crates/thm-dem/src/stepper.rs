@@ -27,7 +27,9 @@
 //!    flags without a branch, the others adding +0; when at most a quarter of the contacts
 //!    did in the previous step, only the stamped particles look),
 //!    then adds its block's sum, external force and gravity (no floating-point atomics: the
-//!    same bits for any thread count), then Cundall's non-viscous damping (A-Eq. 7) and
+//!    same bits for any thread count); on one thread the contact passes add those shares
+//!    to a per-particle sum directly, in the same order from the same +0, and the gather
+//!    reads it (no spill entries: on large packings their reads missed the caches), then Cundall's non-viscous damping (A-Eq. 7) and
 //!    leapfrog, with the finiteness check (the first bad particle is a minimum over indices);
 //! 4. events: broken-bond events (the contacts are scanned only when a bond broke) and wall
 //!    forces, serially in contact order;
@@ -133,6 +135,15 @@ pub struct Stepper<L: ContactLaw> {
     /// written in every step in which it carries force; stale otherwise (the gather then
     /// adds zero instead, see `active`).
     spill: Vec<SpillEntry>,
+    /// On one thread: per particle, the sum of the forces and torques of the contacts of
+    /// earlier blocks, added in contact order by the contact passes (the same sums, bit for
+    /// bit, as the gather forms from spill entries on several threads; see
+    /// `contacts_then_gathers`) and cleared by the gather that reads them. All zero between
+    /// steps (`foreign_clean`).
+    foreign: Vec<SpillEntry>,
+    /// False while a contact pass may have left `foreign` entries that no gather cleared (a
+    /// step interrupted by a panic): the next step clears them all.
+    foreign_clean: bool,
     /// `touched[i] == stamp` when a contact of an earlier block left particle `i` a spill
     /// entry in this step, stored by the contact pass itself (used only when few contacts
     /// carried force: the gather then reads spill entries only for stamped particles). Every
@@ -201,6 +212,8 @@ impl<L: ContactLaw> Stepper<L> {
             index_key: None,
             active: Vec::new(),
             spill: Vec::new(),
+            foreign: Vec::new(),
+            foreign_clean: true,
             touched: Vec::new(),
             stamp: 0,
             quiet_below: Vec::new(),
@@ -425,6 +438,11 @@ impl<L: ContactLaw> Stepper<L> {
         } = state;
         self.active.resize(contacts.len(), 0);
         self.spill.resize(contacts.len(), SpillEntry::default());
+        if !self.foreign_clean {
+            self.foreign.fill(SpillEntry::default());
+        }
+        self.foreign.resize(n, SpillEntry::default());
+        self.foreign_clean = false;
         let ParticleState {
             kinematics,
             position,
@@ -496,6 +514,7 @@ impl<L: ContactLaw> Stepper<L> {
             torque,
             &mut self.spill,
             &mut self.active,
+            &mut self.foreign,
         );
         contacts_then_gathers(
             layout,
@@ -506,6 +525,8 @@ impl<L: ContactLaw> Stepper<L> {
             &|c, block, rows| pass.block(c, block, rows),
             &|j, rows| pass.gather(j, rows),
         );
+        // Every gather ran and cleared its particles' entries.
+        self.foreign_clean = true;
         let first_bad = pass.first_bad.into_inner();
         (
             pass.broke.into_inner(),
@@ -691,6 +712,7 @@ impl<L: ContactLaw> BlockPass<'_, L> {
             angular_velocity: w,
             spill,
             active,
+            mut foreign,
             block_force: force,
             block_torque: torque,
         } = rows;
@@ -772,6 +794,10 @@ impl<L: ContactLaw> BlockPass<'_, L> {
                     if b < e {
                         force[b - s] += r.force_on_b;
                         torque[b - s] += r.torque_on_b;
+                    } else if let Some(sums) = foreign.as_deref_mut() {
+                        let SpillEntry([f, t]) = &mut sums[b - s];
+                        *f += r.force_on_b;
+                        *t += r.torque_on_b;
                     } else {
                         // Component by component: a whole-entry copy went through the
                         // stack with mixed widths, and the loads of a copy spanning two
@@ -855,6 +881,7 @@ impl<L: ContactLaw> BlockPass<'_, L> {
             torque: ts,
             spill,
             active,
+            mut foreign,
         } = rows;
         let mut bad = usize::MAX;
         let ranges = b_start[s..=e].windows(2);
@@ -877,7 +904,12 @@ impl<L: ContactLaw> BlockPass<'_, L> {
             let i = s + j;
             let mut fi = Vec3::ZERO;
             let mut ti = Vec3::ZERO;
-            if !(sparse && touched[i].load(Relaxed) != stamp) {
+            if let Some(sums) = foreign.as_deref_mut() {
+                // One thread: the contact passes summed them already, in the same order.
+                let SpillEntry([f, t]) = std::mem::take(&mut sums[j]);
+                fi = f;
+                ti = t;
+            } else if !(sparse && touched[i].load(Relaxed) != stamp) {
                 // An inactive contact adds +0 (which changes no bit of a sum that starts at
                 // +0), chosen without a branch (which contacts carry force follows no pattern)
                 // and without reading its stale spill entry.
