@@ -29,8 +29,9 @@
 //!    then adds its block's sum, external force and gravity (no floating-point atomics: the
 //!    same bits for any thread count); on one thread the contact passes add those shares
 //!    to a per-particle sum directly, in the same order from the same +0, and the gather
-//!    reads it (no spill entries: on large packings their reads missed the caches), then Cundall's non-viscous damping (A-Eq. 7) and
-//!    leapfrog, with the finiteness check (the first bad particle is a minimum over indices);
+//!    reads it (no spill entries: on large packings their reads missed the caches); then
+//!    Cundall's non-viscous damping (A-Eq. 7) and leapfrog, with the finiteness check (the
+//!    first bad particle is a minimum over indices);
 //! 4. events: broken-bond events (the contacts are scanned only when a bond broke) and wall
 //!    forces, serially in contact order;
 //! 5. walls move at their prescribed velocity.
