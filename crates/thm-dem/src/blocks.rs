@@ -1,24 +1,28 @@
 //! The step's contact pass and gather as one parallel region over blocks of particles.
 //!
 //! A block's contact pass (contact `c`) reads the particles of its own and of later blocks
-//! (a contact `[a, b]` has `a < b`) and writes its own contacts' data and block sums; the
-//! gather of block `j` (gather `j`) reads the block sums of `j` and the spill entries left
-//! for `j` by earlier blocks, and moves the particles of `j`. So gather `j` may run as soon
-//! as contacts `0..=j` are done, while later contacts are still running: the threads of
-//! the pool take contacts in ascending order and each runs the gather of the block it has
-//! just finished when every earlier contact is done too; when no contact is left they share
-//! the gathers still waiting (about a fifth of a contact's time each), so the threads finish
-//! within a gather of each other instead of up to a contact block apart.
+//! (a contact `[a, b]` has `a < b`), up to the last particle its contacts reach, and writes
+//! its own contacts' data and block sums; the gather of block `j` (gather `j`) sums what
+//! the contacts of earlier blocks left for its particles, adds the block sums and moves the
+//! particles of `j`. What a contact leaves for a particle of a later block is added at once
+//! to that particle's running sum (in contact order: the contacts of a run of blocks are
+//! taken in order by one thread), unless a contact of an earlier run reaches the particle
+//! too: then it goes to the contact's spill entry, and the gather sums the spill entries
+//! in contact order. Both give the same bits: a running sum in contact order from +0.
 //!
-//! A thread with nothing to take spins while another thread is inside a contact or a gather
-//! (pure computation, so the wait is finite) and returns only when all are done: a rayon
-//! worker that finds nothing to steal goes to sleep after a few microseconds, and waking
-//! it again (a futex wake of a halted virtual CPU) cost about 60 µs per step on the
-//! 10⁴-sphere bed, more than the imbalance it waited for. Only past [`MAX_WAIT`] (the thread
-//! it waits for lost its core on a loaded machine) does it return earlier and leave the
-//! remaining jobs to the threads still working.
+//! On several threads the blocks are cut into as many contiguous runs as threads, with
+//! about equal numbers of contacts; each thread takes the next run and does, in order,
+//! contact `c` and, unless a contact of an earlier run reaches block `c` (the run's "zone",
+//! a prefix of it about one layer of particles long), gather `c`; then it waits until every
+//! earlier run's contacts are done and gathers its zone. Spill entries are written only for
+//! the contacts that reach a zone, and a thread reads what another wrote only there.
 //!
-//! Which thread runs a contact or a gather changes nothing in its result.
+//! A waiting thread spins, then yields its core between polls (the run it waits for may
+//! have lost its core on a loaded machine): a rayon worker that sleeps costs a futex wake
+//! (about 60 µs per step on the 10⁴-sphere bed).
+//!
+//! Which thread runs a contact or a gather, and where the runs are cut, changes nothing in
+//! the result.
 //!
 //! The rows that a contact and a gather see (see [`ContactRows`] and [`GatherRows`]) are
 //! borrowed from slices shared by all threads; this module's schedule is what makes those
@@ -29,23 +33,24 @@ use crate::vec3::Vec3;
 use std::hint::spin_loop;
 use std::marker::PhantomData;
 use std::ops::Range;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Mutex, PoisonError};
 use std::time::{Duration, Instant};
 
 /// Spins (with the CPU's pause hint, up to about 140 cycles each on recent x86) before a
-/// waiting thread starts yielding its core between polls: a thread that holds the contact
-/// or gather it waits for may have been descheduled on a loaded (or oversubscribed)
-/// machine. Yielding does not sleep: an idle core returns at once.
+/// waiting thread starts yielding its core between polls.
 const SPINS_BEFORE_YIELD: u32 = 1 << 8;
 
-/// How long a thread waits for another's contact or gather before it leaves the work to the
-/// others: a few contact blocks of the 10⁴-sphere bed (about 40 µs each) on an unloaded
+/// How long a thread with nothing to take waits for the others before it leaves the rest to
+/// them: a few contact blocks of the 10⁴-sphere bed (about 40 µs each) on an unloaded
 /// machine, so that only a thread that lost its core waits longer.
 const MAX_WAIT: Duration = Duration::from_micros(150);
 
+/// At most this many runs (threads) share one call.
+const MAX_RUNS: usize = 64;
+
 /// Force and torque that a contact leaves for the gather of a later block (on its second
-/// particle). Aligned to a 64-byte cache line: writing or reading one touches one line.
+/// particle), and a particle's running sum of those.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct SpillEntry(pub [Vec3; 2]);
 
@@ -168,10 +173,10 @@ pub(crate) struct ContactRows<'r> {
     pub angular_velocity: &'r [Vec3],
     pub spill: &'r mut [SpillEntry],
     pub active: &'r mut [u8],
-    /// On one thread only (else `None`): the sums of the contacts of earlier blocks on
-    /// particles `s..n`, to which the contact adds those on its later blocks' particles in
-    /// contact order instead of leaving spill entries (`[0]` is particle `s`).
-    pub foreign: Option<&'r mut [SpillEntry]>,
+    /// The running sums of the particles to which the contact adds its share directly
+    /// (see the module documentation); a particle of a later block outside them gets a
+    /// spill entry.
+    pub foreign: ForeignRows<'r>,
     pub block_force: &'r mut [Vec3],
     pub block_torque: &'r mut [Vec3],
 }
@@ -188,8 +193,9 @@ pub(crate) struct GatherRows<'r> {
     pub torque: &'r mut [Vec3],
     pub spill: &'r [SpillEntry],
     pub active: &'r [u8],
-    /// On one thread only (else `None`): the sums of the contacts of earlier blocks on the
-    /// block's particles (see [`ContactRows::foreign`]), which the gather reads and clears.
+    /// The running sums of the block's particles, which the gather reads and clears; `None`
+    /// when the block lies in a zone (then `spill` and `active` hold what earlier blocks
+    /// left, else they are empty).
     pub foreign: Option<&'r mut [SpillEntry]>,
 }
 
@@ -201,6 +207,22 @@ pub(crate) struct Layout<'a> {
     pub n: usize,
     pub block: usize,
     pub spill_start: &'a [u32],
+    /// Per block: one past the last particle its contacts reach (at least its own end).
+    pub reach: &'a [u32],
+}
+
+/// Running sums of particles `start..start + sums.len()` (see [`ContactRows::foreign`]).
+pub(crate) struct ForeignRows<'r> {
+    pub start: usize,
+    pub sums: &'r mut [SpillEntry],
+}
+
+impl ForeignRows<'_> {
+    /// The running sum of particle `i`, if it is one of these.
+    #[inline]
+    pub fn get(&mut self, i: usize) -> Option<&mut SpillEntry> {
+        self.sums.get_mut(i.wrapping_sub(self.start))
+    }
 }
 
 impl Layout<'_> {
@@ -216,72 +238,11 @@ impl Layout<'_> {
         let p = self.particles(c);
         self.spill_start[p.start] as usize..self.spill_start[p.end] as usize
     }
-}
 
-/// Where a block stands in one [`contacts_then_gathers`] call.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Stage {
-    Waiting,
-    ContactTaken,
-    ContactDone,
-    GatherTaken,
-}
-
-/// The shared schedule of one call: handed out and updated only under its mutex.
-struct Schedule<'s, S> {
-    /// Blocks `next..`, whose contacts nobody has taken yet, with their data.
-    rest: Option<(Range<usize>, S)>,
-    stage: &'s mut [Stage],
-    /// Contacts `0..prefix` are all done: gathers `0..prefix` may run.
-    prefix: usize,
-    /// Gathers below `scan` are all taken.
-    scan: usize,
-}
-
-enum Job<S> {
-    Contact(usize, S),
-    Gather(usize),
-    /// Nothing to take now, but contacts are running.
-    Wait,
-    /// Every gather is taken.
-    Finished,
-}
-
-impl<S: BlockRun> Schedule<'_, S> {
-    /// Contact `c` returned: advances the prefix of done contacts; then gather `c` if it
-    /// may run now, else the next job.
-    fn contact_done(&mut self, c: usize) -> Job<S> {
-        self.stage[c] = Stage::ContactDone;
-        while self.prefix < self.stage.len() && self.stage[self.prefix] == Stage::ContactDone {
-            self.prefix += 1;
-        }
-        if c < self.prefix {
-            self.stage[c] = Stage::GatherTaken;
-            return Job::Gather(c);
-        }
-        self.next_job()
-    }
-
-    /// The next contact (ascending), else the first gather that may run, else whether to
-    /// wait or stop.
-    fn next_job(&mut self) -> Job<S> {
-        if let Some((c, data)) = take_front(&mut self.rest) {
-            self.stage[c] = Stage::ContactTaken;
-            return Job::Contact(c, data);
-        }
-        while self.scan < self.stage.len() && self.stage[self.scan] == Stage::GatherTaken {
-            self.scan += 1;
-        }
-        if self.scan == self.stage.len() {
-            return Job::Finished;
-        }
-        match (self.scan..self.prefix).find(|&j| self.stage[j] == Stage::ContactDone) {
-            Some(j) => {
-                self.stage[j] = Stage::GatherTaken;
-                Job::Gather(j)
-            }
-            None => Job::Wait,
-        }
+    /// The particles whose kinematics contact `c` reads.
+    fn read_by(&self, c: usize) -> Range<usize> {
+        let p = self.particles(c);
+        p.start..(self.reach[c] as usize).clamp(p.end, self.n)
     }
 }
 
@@ -300,8 +261,26 @@ fn take_front<S: BlockRun>(q: &mut Option<(Range<usize>, S)>) -> Option<(usize, 
     }
 }
 
-/// When dropped during a panic, tells the other threads to stop taking work and stop
-/// waiting, so that rayon's join can pass the panic on.
+/// The blocks `..end` of the run `q` with their data (the rest stays in `q`).
+fn take_until<S: BlockRun>(
+    q: &mut Option<(Range<usize>, S)>,
+    end: usize,
+) -> Option<(Range<usize>, S)> {
+    let (run, data) = q.take()?;
+    if end >= run.end {
+        return Some((run, data));
+    }
+    if end <= run.start {
+        *q = Some((run, data));
+        return None;
+    }
+    let (low, high) = data.split_at_block(run.clone(), end);
+    *q = Some((end..run.end, high));
+    Some((run.start..end, low))
+}
+
+/// When dropped during a panic, tells the other threads to stop waiting, so that rayon's
+/// join can pass the panic on.
 struct AbortOnPanic<'a>(&'a AtomicBool);
 
 impl Drop for AbortOnPanic<'_> {
@@ -312,34 +291,41 @@ impl Drop for AbortOnPanic<'_> {
     }
 }
 
-/// Runs `contact(c, data of block c, rows of contact c)` and then `gather(c, rows of gather
-/// c)` for every block `c` of `layout`, with `stage` as scratch; contacts and gathers run on
-/// the calling thread and, with `parallel`, on the other threads of the current rayon pool
-/// (up to one per block). Panics if `layout.spill_start` decreases from block to block or
-/// a row lies outside its slice.
+/// Runs `contact(c, data of block c, rows of contact c)` and `gather(c, rows of gather c)`
+/// for every block `c` of `layout`, with `scratch`; on the calling thread and, with
+/// `parallel`, on the other threads of the current rayon pool (one run of blocks each, see
+/// the module documentation). Panics if `layout.spill_start` decreases from block to block
+/// or a row lies outside its slice (a contact that reads a particle outside
+/// `layout.read_by(c)`).
+///
+/// Runs: run `t` holds blocks `bound[t]..bound[t + 1]` (particles `s_t..r_t`); its zone is
+/// its particles below `z_t`, the largest `reach` of the blocks of earlier runs rounded up
+/// to a block boundary (clamped to `s_t..r_t`; `z_0 = s_0`); one thread is one run.
 ///
 /// Why the row borrows are disjoint (the proof of the unsafe blocks below):
 ///
-/// - each contact and each gather runs exactly once, and when this function returns (also
-///   by a panic) none is running: a thread stops only when every gather is done or another
-///   thread panicked, and rayon's join waits for every thread;
-/// - gather `j` starts only after contacts `0..=j` have returned, and everything they wrote
-///   happens before it (the schedule's mutex orders them); a contact's or gather's rows are
-///   borrowed only for its call (`ContactRows<'r>`, `GatherRows<'r>` cannot outlive it);
-/// - contact `c` (particles `s_c..e_c`) borrows kinematics rows `s_c..n` read-only and its
-///   own force and torque rows `s_c..e_c` (its block sums) and spill and activity rows
-///   `spill(c)` writable; gather `j` borrows particle rows `s_j..e_j` (kinematics, force and
-///   torque) writable and spill and activity rows `0..spill_start[s_j]` read-only;
-/// - while gather `j` runs, every contact still running has `c > j`, so `s_c >= e_j` (its
-///   kinematics, force and torque rows lie above block `j`) and, `spill_start`
-///   being nondecreasing at block boundaries (checked on entry), its spill and activity
-///   rows start at `spill_start[s_c] >= spill_start[s_j]`; contacts borrow pairwise
-///   disjoint force, torque, spill and activity rows, gathers pairwise disjoint particle
-///   rows.
-///
-/// - on one thread only (no other thread runs a contact or a gather), contact `c` also
-///   borrows the per-particle rows `s_c..n` of the foreign sums writable, and gather `j`
-///   rows `s_j..e_j`; one runs after the other on that thread;
+/// - each run is taken by exactly one thread, which runs its contacts in block order, the
+///   gather of a block outside the zone right after its contact, and the gathers of its
+///   zone after its own contacts and after every earlier run has set its "contacts done"
+///   flag (release / acquire, so all those contacts' writes happen before); a contact's
+///   or gather's rows are borrowed only for its call (`ContactRows<'r>`, `GatherRows<'r>`);
+///   when this function returns (also by a panic) no contact or gather is running (rayon's
+///   join waits for every thread);
+/// - contact `c` of run `t` borrows kinematics rows `read_by(c)` read-only, its own force
+///   and torque rows (block sums) and its own spill and activity rows writable, and the
+///   running sums `max(s_c, z_t)..r_t` writable; gather `j` borrows its particle rows
+///   (kinematics, force, torque, and its running sums outside the zone) writable and, in a
+///   zone only, the spill and activity rows `0..spill_start[s_j]` read-only;
+/// - two contacts: kinematics are only read; block sums, spill and activity rows are each
+///   contact's own; running sums lie in the contact's own run, and two contacts of one run
+///   never run at once;
+/// - contact `c` of run `t` and gather `j` of run `u` at the same time: `u != t` (a run is
+///   one thread). If `u > t`: a zone gather waits for run `t`'s contacts, so `j` is outside
+///   the zone, `s_j >= z_u >= reach[c]` (kinematics disjoint), it borrows no spill or
+///   activity rows, and its running sums lie in run `u`. If `u < t`: `j`'s particles and
+///   sums lie below `s_t <= s_c`, and its spill rows end at `spill_start[s_j] <=
+///   spill_start[s_c]`, where `c`'s begin (nondecreasing, checked on entry);
+/// - two gathers: their particle rows and running sums are disjoint; spill is only read.
 ///
 /// So no row is written while another borrow of it is alive.
 #[allow(clippy::too_many_arguments)]
@@ -347,7 +333,7 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
     layout: Layout<'_>,
     rows: &PassRows<'_>,
     data: S,
-    stage: &mut Stages,
+    scratch: &mut Stages,
     parallel: bool,
     contact: &(impl Fn(usize, S, ContactRows<'_>) + Sync),
     gather: &(impl Fn(usize, GatherRows<'_>) + Sync),
@@ -357,28 +343,93 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
         (0..blocks).all(|c| layout.spill(c).start <= layout.spill(c).end),
         "spill entries out of block order"
     );
-    let n = layout.n;
-    let contact = |c: usize, data: S, serial: bool| {
+    assert!(layout.reach.len() >= blocks, "a reach per block");
+    let threads = if parallel {
+        rayon::current_num_threads().min(blocks).min(MAX_RUNS)
+    } else {
+        1
+    };
+    let Stages {
+        bound,
+        zone,
+        progress,
+        next_zone,
+        cost,
+    } = scratch;
+    if cost.len() != blocks {
+        cost.clear();
+        cost.resize_with(blocks, || AtomicU64::new(1));
+    }
+    // Runs of about equal cost in the last call (equal block counts at first).
+    let total: u64 = cost.iter().map(|c| c.load(Ordering::Relaxed).max(1)).sum();
+    bound.clear();
+    bound.push(0);
+    let mut sum = 0_u64;
+    let mut c = 0;
+    for t in 1..threads {
+        let target = total * t as u64 / threads as u64;
+        while c < blocks && sum + cost[c].load(Ordering::Relaxed).max(1) / 2 < target {
+            sum += cost[c].load(Ordering::Relaxed).max(1);
+            c += 1;
+        }
+        let last = bound[t - 1];
+        bound.push(c.clamp(last + 1, blocks - (threads - t)));
+    }
+    bound.push(blocks);
+    // Zones: the largest reach of every earlier run.
+    zone.clear();
+    let mut reach = 0_usize;
+    for t in 0..threads {
+        let first = layout.particles(bound[t]).start;
+        let end = layout.particles(bound[t + 1] - 1).end;
+        let z = reach.div_ceil(layout.block) * layout.block;
+        zone.push(z.clamp(first, end));
+        for c in bound[t]..bound[t + 1] {
+            reach = reach.max(layout.reach[c] as usize);
+        }
+    }
+    progress.truncate(0);
+    progress.resize_with(threads, || AtomicUsize::new(0));
+    next_zone.truncate(0);
+    next_zone.extend(bound[..threads].iter().map(|&b| AtomicUsize::new(b)));
+    let (bound, zone, progress, next_zone, cost) = (
+        &bound[..],
+        &zone[..],
+        &progress[..],
+        &next_zone[..],
+        &cost[..],
+    );
+    let contact = |t: usize, c: usize, data: S| {
         let p = layout.particles(c);
-        // SAFETY: the rows of contact `c` (see above).
+        let run_end = layout.particles(bound[t + 1] - 1).end;
+        let sums = p.start.max(zone[t])..run_end;
+        // SAFETY: the rows of contact `c` of run `t` (see above).
         let r = unsafe {
             ContactRows {
-                position: rows.position.rows(p.start..n),
-                velocity: rows.velocity.rows(p.start..n),
-                angular_velocity: rows.angular_velocity.rows(p.start..n),
+                position: rows.position.rows(layout.read_by(c)),
+                velocity: rows.velocity.rows(layout.read_by(c)),
+                angular_velocity: rows.angular_velocity.rows(layout.read_by(c)),
                 spill: rows.spill.rows_mut(layout.spill(c)),
                 active: rows.active.rows_mut(layout.spill(c)),
-                foreign: serial.then(|| rows.foreign.rows_mut(p.start..n)),
+                foreign: ForeignRows {
+                    start: sums.start,
+                    sums: rows.foreign.rows_mut(sums),
+                },
                 block_force: rows.force.rows_mut(p.clone()),
                 block_torque: rows.torque.rows_mut(p),
             }
         };
         contact(c, data, r);
     };
-    let gather = |j: usize, serial: bool| {
+    let gather = |t: usize, j: usize| {
         let p = layout.particles(j);
-        let below = layout.spill_start[p.start] as usize;
-        // SAFETY: the rows of gather `j` (see above).
+        let in_zone = p.start < zone[t];
+        let below = if in_zone {
+            layout.spill_start[p.start] as usize
+        } else {
+            0
+        };
+        // SAFETY: the rows of gather `j` of run `t` (see above).
         let r = unsafe {
             GatherRows {
                 position: rows.position.rows_mut(p.clone()),
@@ -388,74 +439,105 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
                 torque: rows.torque.rows_mut(p.clone()),
                 spill: rows.spill.rows(0..below),
                 active: rows.active.rows(0..below),
-                foreign: serial.then(|| rows.foreign.rows_mut(p)),
+                foreign: (!in_zone).then(|| rows.foreign.rows_mut(p)),
             }
         };
         gather(j, r);
     };
-    let stage = stage.for_blocks(blocks);
-    let threads = if parallel {
-        rayon::current_num_threads().min(blocks)
-    } else {
-        1
-    };
-    if threads <= 1 {
-        // In order on this thread: contact c, then gather c (contacts 0..=c are done).
-        let mut rest = Some((0..blocks, data));
-        while let Some((c, block)) = take_front(&mut rest) {
-            contact(c, block, true);
-            gather(c, true);
-        }
-        return;
-    }
-    let stage = &mut stage[..blocks];
-    stage.fill(Stage::Waiting);
-    let (contact, gather) = (&contact, &gather);
-    let schedule = Mutex::new(Schedule {
-        rest: Some((0..blocks, data)),
-        stage,
-        prefix: 0,
-        scan: 0,
-    });
-    let gathers_done = AtomicUsize::new(0);
+    let schedule = Mutex::new((0_usize, Some((0..blocks, data))));
     let abort = AtomicBool::new(false);
+    // Per run: how many of its contacts are done (in block order), the next zone gather to
+    // take; over all runs: runs whose contacts and gathers outside the zone are done, zone
+    // gathers done.
+    let zone_end = |t: usize| {
+        bound[t + 1]
+            .min(zone[t].div_ceil(layout.block))
+            .max(bound[t])
+    };
+    let zone_total: usize = (0..threads).map(|t| zone_end(t) - bound[t]).sum();
+    let runs_finished = AtomicUsize::new(0);
+    let zones_finished = AtomicUsize::new(0);
     let participant = || {
         let _abort = AbortOnPanic(&abort);
-        let lock = || schedule.lock().unwrap_or_else(PoisonError::into_inner);
-        let mut job = lock().next_job();
+        loop {
+            let (t, mut run) = {
+                let mut s = schedule.lock().unwrap_or_else(PoisonError::into_inner);
+                let t = s.0;
+                if t >= threads {
+                    break;
+                }
+                s.0 += 1;
+                (t, take_until(&mut s.1, bound[t + 1]))
+            };
+            let zone_blocks = bound[t]..zone_end(t);
+            while let Some((c, block)) = take_front(&mut run) {
+                let started = Instant::now();
+                contact(t, c, block);
+                let in_zone = zone_blocks.contains(&c);
+                if in_zone {
+                    // Its gather (timed by whoever runs it) adds to this.
+                    cost[c].store(nanos(started), Ordering::Relaxed);
+                }
+                progress[t].store(c + 1 - bound[t], Ordering::Release);
+                if !in_zone {
+                    gather(t, c);
+                    cost[c].store(nanos(started), Ordering::Relaxed);
+                }
+            }
+            runs_finished.fetch_add(1, Ordering::Release);
+        }
+        // Zone gathers, by whichever thread finds one ready: gather `j` of run `t` once every
+        // earlier run's contacts and run `t`'s contacts up to `j` are done. A thread with
+        // nothing to take waits until all is done (so that it does not sleep in rayon's join)
+        // but gives up after `MAX_WAIT`: the thread that finishes the last run's contacts
+        // finds every zone gather ready.
         let mut waiter = Waiter::default();
         loop {
             if abort.load(Ordering::Acquire) {
                 return;
             }
-            job = match job {
-                Job::Contact(c, block) => {
-                    waiter = Waiter::default();
-                    contact(c, block, false);
-                    lock().contact_done(c)
+            let mut took = false;
+            let mut earlier_done = true;
+            for t in 0..threads {
+                if earlier_done {
+                    let done = progress[t].load(Ordering::Acquire);
+                    loop {
+                        let j = next_zone[t].load(Ordering::Relaxed);
+                        if j >= zone_end(t) || j - bound[t] >= done {
+                            break;
+                        }
+                        if next_zone[t]
+                            .compare_exchange(j, j + 1, Ordering::Relaxed, Ordering::Relaxed)
+                            .is_ok()
+                        {
+                            let started = Instant::now();
+                            gather(t, j);
+                            cost[j].fetch_add(nanos(started), Ordering::Relaxed);
+                            zones_finished.fetch_add(1, Ordering::Release);
+                            took = true;
+                        }
+                    }
+                    earlier_done = done == bound[t + 1] - bound[t];
                 }
-                Job::Gather(j) => {
-                    waiter = Waiter::default();
-                    gather(j, false);
-                    gathers_done.fetch_add(1, Ordering::Release);
-                    lock().next_job()
-                }
-                // Another thread is inside a contact that a gather waits for. Past the
-                // waiting time (a descheduled thread on a loaded machine), this thread leaves
-                // the rest to the threads still working: each job may run on any of them.
-                Job::Wait if waiter.poll() => lock().next_job(),
-                Job::Wait => return,
-                Job::Finished => break,
-            };
+            }
+            if runs_finished.load(Ordering::Acquire) == threads
+                && zones_finished.load(Ordering::Acquire) == zone_total
+            {
+                return;
+            }
+            if took {
+                waiter = Waiter::default();
+            } else if !waiter.poll() {
+                return;
+            }
         }
-        // Every gather is taken: wait for those still running elsewhere, so that this
-        // thread does not go to sleep in rayon's join (see the module documentation).
-        while gathers_done.load(Ordering::Acquire) < blocks
-            && !abort.load(Ordering::Acquire)
-            && waiter.poll()
-        {}
     };
     participants(threads, &participant);
+}
+
+/// Nanoseconds since `t`.
+fn nanos(t: Instant) -> u64 {
+    u64::try_from(t.elapsed().as_nanos()).unwrap_or(u64::MAX)
 }
 
 /// Polls for another thread's progress: spins, then yields its core between polls, and
@@ -490,18 +572,16 @@ fn participants(count: usize, f: &(impl Fn() + Sync)) {
     }
 }
 
-/// Scratch for [`contacts_then_gathers`]: one stage per block.
+/// Scratch for [`contacts_then_gathers`]: the runs' bounds and zones, and their flags.
 #[derive(Debug, Default)]
-pub(crate) struct Stages(Vec<Stage>);
-
-impl Stages {
-    /// At least `blocks` stages.
-    fn for_blocks(&mut self, blocks: usize) -> &mut [Stage] {
-        if self.0.len() < blocks {
-            self.0.resize(blocks, Stage::Waiting);
-        }
-        &mut self.0
-    }
+pub(crate) struct Stages {
+    bound: Vec<usize>,
+    zone: Vec<usize>,
+    progress: Vec<AtomicUsize>,
+    next_zone: Vec<AtomicUsize>,
+    /// Per block: the time its contact and gather took in the last call \[ns\] (where the
+    /// runs are cut; only the speed depends on it).
+    cost: Vec<AtomicU64>,
 }
 
 #[cfg(test)]
@@ -520,24 +600,30 @@ mod tests {
         }
     }
 
-    /// Arrays for `n` particles, one spill entry per particle.
+    /// Arrays for `n` particles, one spill entry per particle; block `c`'s contacts reach
+    /// `span` blocks beyond it.
     struct Arrays {
         kin: [Vec<Vec3>; 5],
         spill: Vec<SpillEntry>,
         active: Vec<u8>,
         foreign: Vec<SpillEntry>,
         spill_start: Vec<u32>,
+        reach: Vec<u32>,
     }
 
     impl Arrays {
-        fn new(n: usize) -> Self {
+        fn new(n: usize, span: usize) -> Self {
             let z = || vec![Vec3::ZERO; n];
+            let blocks = n.div_ceil(BLOCK_LEN);
             Self {
                 kin: [z(), z(), z(), z(), z()],
                 spill: vec![SpillEntry::default(); n],
                 active: vec![0; n],
                 foreign: vec![SpillEntry::default(); n],
                 spill_start: (0..=n as u32).collect(),
+                reach: (0..blocks)
+                    .map(|c| (((c + 1 + span) * BLOCK_LEN).min(n)) as u32)
+                    .collect(),
             }
         }
 
@@ -547,6 +633,7 @@ mod tests {
                 n: x.len(),
                 block: BLOCK_LEN,
                 spill_start: &self.spill_start,
+                reach: &self.reach,
             };
             (
                 layout,
@@ -564,79 +651,116 @@ mod tests {
         }
     }
 
-    /// Contact c writes its block's entries, block sums and spill entries; gather j checks
-    /// that contacts 0..=j are done and wrote theirs, and moves its particles.
-    fn run(threads: usize, parallel: bool, len: usize) {
+    /// Contact c writes its block's entries, block sums and spill entries, and adds one to
+    /// every later particle it reaches: to its running sum, or (outside the sums it is
+    /// lent) to a counter standing for a spill entry. Gather j checks that every contact
+    /// reaching it is done, that the ones and the counters add up to the number of contacts
+    /// reaching each particle, that a zone gather sees the spill entries of every earlier
+    /// block, and moves its particles.
+    fn run(threads: usize, parallel: bool, len: usize, span: usize, steps: usize) {
         let blocks = len.div_ceil(BLOCK_LEN);
-        let mut own = vec![0_u64; len];
-        let mut arrays = Arrays::new(len);
-        let seen: Vec<AtomicUsize> = (0..blocks).map(|_| AtomicUsize::new(0)).collect();
-        let gathered: Vec<AtomicUsize> = (0..blocks).map(|_| AtomicUsize::new(0)).collect();
+        let mut arrays = Arrays::new(len, span);
+        let reach = arrays.reach.clone();
         let mut stages = Stages::default();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
-        let (layout, rows) = arrays.rows();
-        pool.install(|| {
-            contacts_then_gathers(
-                layout,
-                &rows,
-                Run(&mut own),
-                &mut stages,
-                parallel,
-                &|c, Run(s), r| {
-                    assert!(s.len() <= BLOCK_LEN && !s.is_empty());
-                    assert_eq!(r.position.len(), len - c * BLOCK_LEN);
-                    for (j, x) in s.iter_mut().enumerate() {
-                        *x = (c * BLOCK_LEN + j) as u64 + 1;
-                    }
-                    assert_eq!(r.active.len(), r.spill.len());
-                    let serial = threads == 1 || !parallel || blocks == 1;
-                    assert_eq!(
-                        r.foreign.map(|f| f.len()),
-                        serial.then_some(r.position.len())
-                    );
-                    for ((f, sp), on) in r
-                        .block_force
-                        .iter_mut()
-                        .zip(r.spill.iter_mut())
-                        .zip(r.active.iter_mut())
-                    {
-                        *f = Vec3::new(c as f64, 0.0, 0.0);
-                        sp.0[0] = Vec3::new(c as f64 + 1.0, 0.0, 0.0);
-                        *on = (c % 251) as u8 + 1;
-                    }
-                    assert_eq!(seen[c].fetch_add(1, Ordering::Relaxed), 0);
-                },
-                &|j, r| {
-                    for s in &seen[..=j] {
-                        assert_eq!(s.load(Ordering::Relaxed), 1, "gather {j} too early");
-                    }
-                    assert_eq!(r.spill.len(), j * BLOCK_LEN);
-                    let serial = threads == 1 || !parallel || blocks == 1;
-                    assert_eq!(
-                        r.foreign.map(|f| f.len()),
-                        serial.then_some(r.position.len())
-                    );
-                    for (k, (sp, on)) in r.spill.iter().zip(r.active).enumerate() {
-                        assert_eq!(sp.0[0].x, (k / BLOCK_LEN) as f64 + 1.0);
-                        assert_eq!(*on, ((k / BLOCK_LEN) % 251) as u8 + 1);
-                    }
-                    for (x, f) in r.position.iter_mut().zip(r.force.iter_mut()) {
-                        assert_eq!(f.x, j as f64);
-                        x.x += 1.0;
-                        f.x = -1.0;
-                    }
-                    assert_eq!(gathered[j].fetch_add(1, Ordering::Relaxed), 0);
-                },
-            );
-        });
-        let want: Vec<u64> = (1..=len as u64).collect();
-        assert_eq!(own, want, "{threads} {parallel} {len}");
-        assert!(gathered.iter().all(|g| g.load(Ordering::Relaxed) == 1));
-        assert!(arrays.kin[0].iter().all(|x| x.x == 1.0));
-        assert!(arrays.kin[3].iter().all(|f| f.x == -1.0));
+        for _ in 0..steps {
+            let mut own = vec![0_u64; len];
+            let seen: Vec<AtomicUsize> = (0..blocks).map(|_| AtomicUsize::new(0)).collect();
+            let gathered: Vec<AtomicUsize> = (0..blocks).map(|_| AtomicUsize::new(0)).collect();
+            let spilled: Vec<AtomicUsize> = (0..len).map(|_| AtomicUsize::new(0)).collect();
+            let (layout, rows) = arrays.rows();
+            pool.install(|| {
+                contacts_then_gathers(
+                    layout,
+                    &rows,
+                    Run(&mut own),
+                    &mut stages,
+                    parallel,
+                    &|c, Run(s), mut r| {
+                        assert!(s.len() <= BLOCK_LEN && !s.is_empty());
+                        let start = c * BLOCK_LEN;
+                        assert_eq!(r.position.len(), reach[c] as usize - start);
+                        for (j, x) in s.iter_mut().enumerate() {
+                            *x = (start + j) as u64 + 1;
+                        }
+                        assert_eq!(r.active.len(), r.spill.len());
+                        for ((f, sp), on) in r
+                            .block_force
+                            .iter_mut()
+                            .zip(r.spill.iter_mut())
+                            .zip(r.active.iter_mut())
+                        {
+                            *f = Vec3::new(c as f64, 0.0, 0.0);
+                            sp.0[0] = Vec3::new(c as f64 + 1.0, 0.0, 0.0);
+                            *on = (c % 251) as u8 + 1;
+                        }
+                        let end = (start + BLOCK_LEN).min(len);
+                        for (p, spill) in
+                            spilled.iter().enumerate().take(reach[c] as usize).skip(end)
+                        {
+                            match r.foreign.get(p) {
+                                Some(sum) => sum.0[0].x += 1.0,
+                                None => {
+                                    spill.fetch_add(1, Ordering::Relaxed);
+                                }
+                            }
+                        }
+                        assert_eq!(seen[c].fetch_add(1, Ordering::Relaxed), 0);
+                    },
+                    &|j, r| {
+                        let start = j * BLOCK_LEN;
+                        for c in 0..=j {
+                            if c == j || reach[c] as usize > start {
+                                assert_eq!(
+                                    seen[c].load(Ordering::Relaxed),
+                                    1,
+                                    "gather {j} before contact {c}"
+                                );
+                            }
+                        }
+                        if r.foreign.is_none() {
+                            assert_eq!(r.spill.len(), start);
+                            for (k, (sp, on)) in r.spill.iter().zip(r.active).enumerate() {
+                                assert_eq!(sp.0[0].x, (k / BLOCK_LEN) as f64 + 1.0);
+                                assert_eq!(*on, ((k / BLOCK_LEN) % 251) as u8 + 1);
+                            }
+                        } else {
+                            assert!(r.spill.is_empty() && r.active.is_empty());
+                        }
+                        let mut sums = r.foreign;
+                        for (i, (x, f)) in r.position.iter_mut().zip(r.force.iter_mut()).enumerate()
+                        {
+                            let p = start + i;
+                            let reaching = (0..j).filter(|&c| reach[c] as usize > p).count() as f64;
+                            let direct = match sums.as_deref_mut() {
+                                Some(s) => std::mem::take(&mut s[i]).0[0].x,
+                                None => 0.0,
+                            };
+                            let spill = spilled[p].load(Ordering::Relaxed) as f64;
+                            assert_eq!(direct + spill, reaching, "particle {p}");
+                            if sums.is_none() {
+                                assert_eq!(direct, 0.0);
+                            } else {
+                                assert_eq!(spill, 0.0, "particle {p}");
+                            }
+                            assert_eq!(f.x, j as f64);
+                            x.x += 1.0;
+                            f.x = -1.0;
+                        }
+                        assert_eq!(gathered[j].fetch_add(1, Ordering::Relaxed), 0);
+                    },
+                );
+            });
+            let want: Vec<u64> = (1..=len as u64).collect();
+            assert_eq!(own, want, "{threads} {parallel} {len}");
+            assert!(gathered.iter().all(|g| g.load(Ordering::Relaxed) == 1));
+            assert!(arrays.kin[3].iter().all(|f| f.x == -1.0));
+            assert!(arrays.foreign.iter().all(|f| *f == SpillEntry::default()));
+        }
+        assert!(arrays.kin[0].iter().all(|x| x.x == steps as f64));
     }
 
     #[test]
@@ -644,7 +768,9 @@ mod tests {
         for threads in [1, 2, 3, 5] {
             for parallel in [false, true] {
                 for len in [0, 1, 3, 4, 7, 30, 31, 300] {
-                    run(threads, parallel, len);
+                    for span in [0, 1, 4] {
+                        run(threads, parallel, len, span, 3);
+                    }
                 }
             }
         }
@@ -658,7 +784,7 @@ mod tests {
                 .build()
                 .unwrap();
             let mut v = vec![0_u64; 30];
-            let mut arrays = Arrays::new(30);
+            let mut arrays = Arrays::new(30, 2);
             let mut stages = Stages::default();
             let (layout, rows) = arrays.rows();
             let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {

@@ -4,42 +4,42 @@
 //!    cell-grid search and merge of the contact histories when a particle (or wall) moved
 //!    more than half the skin; the per-particle contact index when the lists changed;
 //! 2. contact forces, block by block of particles (blocks of 512 consecutive indices,
-//!    fixed by the index, never by the thread count) in parallel: a block owns the contacts
-//!    whose first particle it holds (a range of the sorted list) and its particles' wall
-//!    contacts; each contact writes only its own history, report and "carried force" flag;
-//!    the block sums the forces and torques on its own particles in contact order (in the
-//!    particles' force and torque rows, which the gather then overwrites with the
-//!    resultants), and a contact whose second particle lies in a later block leaves that
-//!    particle's share in the contact's spill entry and stamps the particle (every stamp of
-//!    a step is the same value); a listed pair that does not touch (and is neither bonded
-//!    nor sheared) costs one distance, and is not looked at again, not even its history,
-//!    until the drift since then could have closed its gap (a block sweeps its contacts in
-//!    chunks of 64: it first lists, without a branch, those that are not such quiet pairs,
-//!    then evaluates the listed ones in contact order); these bounds are forgotten when the
-//!    state is not the one the stepper advanced last (taken back from a save) or the
-//!    contact generation changed (see [`DemState::contact_generation`]); reports whether a
-//!    bond broke (a boolean OR);
+//!    fixed by the index, never by the thread count), in parallel over contiguous runs of
+//!    blocks (see `blocks.rs`): a block owns the contacts whose first particle it holds (a
+//!    range of the sorted list) and its particles' wall contacts; each contact writes only
+//!    its own history, report and "carried force" flag; the block sums the forces and
+//!    torques on its own particles in contact order (in the particles' force and torque
+//!    rows, which the gather then overwrites with the resultants); a contact whose second
+//!    particle lies in a later block adds that particle's share to the particle's running
+//!    sum of such shares, or, when a contact of an earlier run of blocks reaches the
+//!    particle too, leaves it in the contact's spill entry and stamps the particle (every
+//!    stamp of a step is the same value); a listed pair that does not touch (and is neither
+//!    bonded nor sheared) costs one distance, and is not looked at again, not even its
+//!    history, until the drift since then could have closed its gap (a block sweeps its
+//!    contacts in chunks of 64: it first lists, without a branch, those that are not such
+//!    quiet pairs, then evaluates the listed ones in contact order); these bounds are
+//!    forgotten when the state is not the one the stepper advanced last (taken back from a
+//!    save) or the contact generation changed (see [`DemState::contact_generation`]);
+//!    reports whether a bond broke (a boolean OR);
 //! 3. gather and integrate, block by block, in the same parallel region as stage 2: the
-//!    gather of a block runs once the contact passes of its own and every earlier block are
-//!    done (a block's contacts read only the particles of its own and later blocks; see
-//!    `blocks.rs` for the schedule): every particle sums the spill entries of its contacts
-//!    with earlier blocks in contact-index order (those that carried force, chosen by their
-//!    flags without a branch, the others adding +0; when at most a quarter of the contacts
-//!    did in the previous step, only the stamped particles look),
-//!    then adds its block's sum, external force and gravity (no floating-point atomics: the
-//!    same bits for any thread count); on one thread the contact passes add those shares
-//!    to a per-particle sum directly, in the same order from the same +0, and the gather
-//!    reads it (no spill entries: on large packings their reads missed the caches); then
-//!    Cundall's non-viscous damping (A-Eq. 7) and leapfrog, with the finiteness check (the
-//!    first bad particle is a minimum over indices);
+//!    gather of a block runs once every contact pass that reaches its particles is done;
+//!    every particle takes its running sum, or (where a spill entry may hold a share) sums
+//!    the spill entries of its contacts with earlier blocks in contact-index order (those
+//!    that carried force, chosen by their flags without a branch, the others adding +0;
+//!    when at most a quarter of the contacts did in the previous step, only the stamped
+//!    particles look): either way the shares in contact order from +0, so the same bits
+//!    for any thread count (no floating-point atomics); then it adds its block's sum,
+//!    external force and gravity, Cundall's non-viscous damping (A-Eq. 7) and leapfrog,
+//!    with the finiteness check (the first bad particle is a minimum over indices);
 //! 4. events: broken-bond events (the contacts are scanned only when a bond broke) and wall
 //!    forces, serially in contact order;
 //! 5. walls move at their prescribed velocity.
 //!
 //! Why blocks: storing every contact's full response for a separate gather to read back
 //! cost more than the contact law itself once the lists outgrow the cache (10⁵ spheres);
-//! a block's own sums stay in cache, and only the contacts that cross a block boundary go
-//! through memory a second time.
+//! a block's own sums stay in cache, a particle's running sum is usually still cached when
+//! the later contacts add to it, and only the contacts that reach another thread's run of
+//! blocks go through memory a second time.
 
 use crate::blocks::{
     BlockRun, ContactRows, GatherRows, Layout, PassRows, SpillEntry, Stages, contacts_then_gathers,
@@ -126,6 +126,9 @@ pub struct Stepper<L: ContactLaw> {
     b_entry: Vec<u32>,
     /// Wall contacts of particle `i` are `wall_start[i]..wall_start[i+1]` (sorted list).
     wall_start: Vec<u32>,
+    /// Per block of particles: one past the last particle its contacts reach (at least the
+    /// block's end): what its contact pass reads.
+    block_reach: Vec<u32>,
     cursor: Vec<u32>,
     index_key: Option<(u64, usize, usize, usize)>,
     /// Whether each contact carries force in this step (the report's `active` flag again, one
@@ -136,11 +139,10 @@ pub struct Stepper<L: ContactLaw> {
     /// written in every step in which it carries force; stale otherwise (the gather then
     /// adds zero instead, see `active`).
     spill: Vec<SpillEntry>,
-    /// On one thread: per particle, the sum of the forces and torques of the contacts of
-    /// earlier blocks, added in contact order by the contact passes (the same sums, bit for
-    /// bit, as the gather forms from spill entries on several threads; see
-    /// `contacts_then_gathers`) and cleared by the gather that reads them. All zero between
-    /// steps (`foreign_clean`).
+    /// Per particle: the running sum of the forces and torques of the contacts of earlier
+    /// blocks (outside the zones, see `blocks.rs`), added in contact order by the contact
+    /// passes (the same sums, bit for bit, as the gather forms from spill entries) and
+    /// cleared by the gather that reads them. All zero between steps (`foreign_clean`).
     foreign: Vec<SpillEntry>,
     /// False while a contact pass may have left `foreign` entries that no gather cleared (a
     /// step interrupted by a panic): the next step clears them all.
@@ -209,6 +211,7 @@ impl<L: ContactLaw> Stepper<L> {
             b_start: Vec::new(),
             b_entry: Vec::new(),
             wall_start: Vec::new(),
+            block_reach: Vec::new(),
             cursor: Vec::new(),
             index_key: None,
             active: Vec::new(),
@@ -375,6 +378,12 @@ impl<L: ContactLaw> Stepper<L> {
         }
         start_of_first(n, &state.contacts.pair, &mut self.a_start);
         start_of_first(n, &state.wall_contacts.pair, &mut self.wall_start);
+        self.block_reach.clear();
+        self.block_reach.extend((0..n.div_ceil(BLOCK)).map(|c| {
+            let (s, e) = (c * BLOCK, ((c + 1) * BLOCK).min(n));
+            let own = &state.contacts.pair[self.a_start[s] as usize..self.a_start[e] as usize];
+            own.iter().map(|p| p[1] + 1).fold(e as u32, u32::max)
+        }));
         let (start, entry, cursor) = (&mut self.b_start, &mut self.b_entry, &mut self.cursor);
         start.clear();
         start.resize(n + 1, 0);
@@ -506,6 +515,7 @@ impl<L: ContactLaw> Stepper<L> {
             n,
             block: BLOCK,
             spill_start: &self.a_start,
+            reach: &self.block_reach,
         };
         let rows = PassRows::new(
             position,
@@ -795,8 +805,7 @@ impl<L: ContactLaw> BlockPass<'_, L> {
                     if b < e {
                         force[b - s] += r.force_on_b;
                         torque[b - s] += r.torque_on_b;
-                    } else if let Some(sums) = foreign.as_deref_mut() {
-                        let SpillEntry([f, t]) = &mut sums[b - s];
+                    } else if let Some(SpillEntry([f, t])) = foreign.get(b) {
                         *f += r.force_on_b;
                         *t += r.torque_on_b;
                     } else {
