@@ -112,12 +112,13 @@
 //! serde structs validated once ([`StepperParams`], [`CohesiveFrictionalParams`],
 //! [`LinearSpringParams`]); the [`Stepper`] holds only scratch buffers. A step is a fixed
 //! sequence of stages (neighbour update, contact forces with gather and integration, events).
-//! Contacts are computed in parallel (rayon) by fixed blocks of particles, each contact writing
-//! only its own entry and each block summing the forces on its own particles in contact order;
-//! a particle then adds the shares of contacts from earlier blocks in contact-index order, so
-//! 1 and 2 threads give identical bits (no floating-point atomics). A block is integrated as
-//! soon as the contacts of its own and every earlier block are done, in the same parallel
-//! region.
+//! Contacts are computed in parallel (rayon) by fixed blocks of particles, each thread taking a
+//! contiguous run of blocks, each contact writing only its own entry and each block summing
+//! the forces on its own particles in contact order; a particle's shares from contacts of
+//! earlier blocks are summed in contact-index order from +0 (a running sum inside a run, spill
+//! entries where an earlier run reaches), so 1, 2 or more threads give identical bits (no
+//! floating-point atomics). A block is integrated as soon as every contact that reaches its
+//! particles is done, in the same parallel region.
 //! Neighbour search is an O(N) cell grid with a Verlet skin; a listed pair found apart is not
 //! looked at again until the particles' drift could have closed its gap (the contact pass
 //! lists the other contacts branch-free and evaluates only those), so the skin changes
