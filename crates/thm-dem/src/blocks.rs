@@ -344,6 +344,9 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
         "spill entries out of block order"
     );
     assert!(layout.reach.len() >= blocks, "a reach per block");
+    if blocks == 0 {
+        return;
+    }
     let threads = if parallel {
         rayon::current_num_threads().min(blocks).min(MAX_RUNS)
     } else {
