@@ -46,8 +46,8 @@ use crate::bar::{
     mean_mass_flux, scale_sphere_density,
 };
 use crate::pore_scale::{
-    CouplingError, FlowScheme, HeatScheme, InitialFluid, PoreScaleConfig, PoreScaleParams,
-    PoreScaleState, PoreScaleStepper, PressureForce, Skeleton,
+    CouplingError, CouplingStepRule, FlowScheme, HeatScheme, InitialFluid, PoreScaleConfig,
+    PoreScaleParams, PoreScaleState, PoreScaleStepper, PressureForce, Skeleton,
 };
 
 /// All verification cases of `thm-coupling`.
@@ -248,54 +248,12 @@ fn closed_conservation_case() -> Result<CaseOutput, CaseError> {
 }
 
 fn contraction_free_start_case() -> Result<CaseOutput, CaseError> {
-    let err = CaseError::from_display;
-    let case = BarCase::ContractionFree;
-    let mut params = bar_params(case, 32);
-    params.dem.time_step *= CASE_A_DENSITY_SCALE.sqrt();
-    let config = params.validate().map_err(err)?;
-    let mut s = bar_state(case, &config, BAR_SEED, &water_air()).map_err(err)?;
-    scale_sphere_density(&mut s, CASE_A_DENSITY_SCALE).map_err(err)?;
-    let rule = case_a_coupling_step().validate().map_err(err)?;
-    let mut stepper = PoreScaleStepper::new(config, water_air(), &s).map_err(err)?;
+    let (mut s, mut stepper, rule) = case_a_bar(None)?;
     let (t_end, interval): (f64, f64) = (0.3, 0.01);
-    let (end_t, initial_t) = (case.end_temperature(), case.initial_temperature());
-    let start = [s.liquid_mass(), s.gas_mass()];
-    let (mut mass_drift, mut beyond) = ([0.0f64; 2], 0.0f64);
-    let (mut steps, mut rejected, mut tension) = (0u64, 0u64, 0.0f64);
-    let mut first_break = f64::NAN;
-    let intervals = (t_end / interval).round() as usize;
-    for _ in 0..intervals {
-        let r = stepper.advance(&mut s, interval, &rule).map_err(err)?;
-        steps += r.steps;
-        rejected += r.rejected;
-        for (k, m) in [s.liquid_mass(), s.gas_mass()].into_iter().enumerate() {
-            mass_drift[k] = mass_drift[k].max(((m - start[k]) / start[k]).abs());
-        }
-        for &t in &s.heat.temperature {
-            beyond = beyond.max(t - initial_t).max(end_t - t);
-        }
-        if s.dem.bond_breaks.is_empty() {
-            tension = tension.max(largest_bond_tension(&s));
-        } else if first_break.is_nan() {
-            first_break = s.time;
-        }
-    }
+    let run = run_case_a(&mut s, &mut stepper, &rule, t_end, interval)?;
     let crack = crack_report(&s);
     let mut out = CaseOutput::default();
-    for (k, what) in ["liquid mass", "gas mass"].iter().enumerate() {
-        out.rows.push(Row::at_most(
-            format!("closed ends: max |Δ{what}| / {what} over {t_end} s (every {interval} s)"),
-            "",
-            mass_drift[k],
-            1e-12,
-        ));
-    }
-    out.rows.push(Row::at_most(
-        format!("largest temperature outside [{end_t}, {initial_t}] K"),
-        "K",
-        beyond.max(0.0),
-        1e-9,
-    ));
+    run.conservation_rows(&mut out, t_end, interval);
     out.rows.push(Row::reported(
         format!("broken bonds at {t_end} s (A-Table 1 bonds; paper: 34 at 17 s)"),
         "",
@@ -305,70 +263,28 @@ fn contraction_free_start_case() -> Result<CaseOutput, CaseError> {
     out.rows.push(Row::reported(
         "largest intact-bond tension before the first break (sampled every 0.01 s)",
         "N",
-        tension,
+        run.tension,
         29.313,
     ));
     out.notes = vec![format!(
-        "Case a of A-Sect. 6 (case b's bar and conditions, only the spheres within 1 mm of either end held), A-Table 1 bonds (T = 30 MPa, C = 150 MPa), DEM masses x{CASE_A_DENSITY_SCALE} (Δt_D = 2e-6 s), corner forces with implicit undrained pores, coupled steps up to 0.01 s moving no sphere by more than 1 % of the smallest radius. First break seen at the end of the interval ending {first_break:.2} s; {} coupled steps, {} rejected and retaken shorter, {} remeshes. The paper's figures are for 17 s (scenarios/bar_contraction_free.toml, docs/cases/bar_contraction_free.md); this case checks what must hold at every moment of the run.",
-        steps, rejected, s.remeshes
+        "Case a of A-Sect. 6 (case b's bar and conditions, only the spheres within 1 mm of either end held), A-Table 1 bonds (T = 30 MPa, C = 150 MPa), DEM masses x{CASE_A_DENSITY_SCALE} (Δt_D = 2e-6 s), corner forces with implicit undrained pores, coupled steps up to 0.01 s moving no sphere by more than 1 % of the smallest radius. First break seen at the end of the interval ending {:.2} s; {} coupled steps, {} rejected and retaken shorter, {} remeshes. The paper's figures are for 17 s (scenarios/bar_contraction_free.toml, docs/cases/bar_contraction_free.md); this case checks what must hold at every moment of the run.",
+        run.first_break, run.steps, run.rejected, s.remeshes
     )];
     Ok(out)
 }
 
 fn contraction_free_case() -> Result<CaseOutput, CaseError> {
-    let err = CaseError::from_display;
-    let case = BarCase::ContractionFree;
-    let mut params = bar_params(case, 32);
-    params.dem.time_step *= CASE_A_DENSITY_SCALE.sqrt();
-    params.contact.tensile_strength = CASE_A_BOND_TENSILE_STRENGTH;
-    params.contact.cohesion = 5.0 * CASE_A_BOND_TENSILE_STRENGTH;
-    let config = params.validate().map_err(err)?;
-    let mut s = bar_state(case, &config, BAR_SEED, &water_air()).map_err(err)?;
-    scale_sphere_density(&mut s, CASE_A_DENSITY_SCALE).map_err(err)?;
-    let rule = case_a_coupling_step().validate().map_err(err)?;
-    let mut stepper = PoreScaleStepper::new(config, water_air(), &s).map_err(err)?;
+    let (mut s, mut stepper, rule) = case_a_bar(Some(CASE_A_BOND_TENSILE_STRENGTH))?;
     let (t_end, interval): (f64, f64) = (17.0, 0.01);
-    let (end_t, initial_t) = (case.end_temperature(), case.initial_temperature());
-    let start = [s.liquid_mass(), s.gas_mass()];
     let d50_initial = crack_report(&s).d50;
-    let (mut mass_drift, mut beyond) = ([0.0f64; 2], 0.0f64);
-    let (mut steps, mut rejected, mut tension, mut speed) = (0u64, 0u64, 0.0f64, 0.0f64);
     let clock = std::time::Instant::now();
-    let intervals = (t_end / interval).round() as usize;
-    for _ in 0..intervals {
-        let r = stepper.advance(&mut s, interval, &rule).map_err(err)?;
-        steps += r.steps;
-        rejected += r.rejected;
-        for (k, m) in [s.liquid_mass(), s.gas_mass()].into_iter().enumerate() {
-            mass_drift[k] = mass_drift[k].max(((m - start[k]) / start[k]).abs());
-        }
-        for &t in &s.heat.temperature {
-            beyond = beyond.max(t - initial_t).max(end_t - t);
-        }
-        if s.dem.bond_breaks.is_empty() {
-            tension = tension.max(largest_bond_tension(&s));
-        }
-        speed = stepper.channel_speeds(&s).into_iter().fold(speed, f64::max);
-    }
+    let run = run_case_a(&mut s, &mut stepper, &rule, t_end, interval)?;
     let seconds = clock.elapsed().as_secs_f64();
     let crack = crack_report(&s);
     let largest_temperature = s.heat.temperature.iter().copied().fold(f64::MIN, f64::max);
     let lowest_pressure = s.flow.pressure.iter().copied().fold(f64::MAX, f64::min);
     let mut out = CaseOutput::default();
-    for (k, what) in ["liquid mass", "gas mass"].iter().enumerate() {
-        out.rows.push(Row::at_most(
-            format!("closed ends: max |Δ{what}| / {what} over {t_end} s (every {interval} s)"),
-            "",
-            mass_drift[k],
-            1e-12,
-        ));
-    }
-    out.rows.push(Row::at_most(
-        format!("largest temperature outside [{end_t}, {initial_t}] K"),
-        "K",
-        beyond.max(0.0),
-        1e-9,
-    ));
+    run.conservation_rows(&mut out, t_end, interval);
     out.rows.push(Row::at_least(
         "remeshes (the moving skeleton's remap exercised)",
         "",
@@ -404,7 +320,7 @@ fn contraction_free_case() -> Result<CaseOutput, CaseError> {
         (
             "largest intact-bond tension before the first break (every 0.01 s)",
             "N",
-            tension,
+            run.tension,
             29.313,
         ),
         ("d50 at the start", "mm", 1e3 * d50_initial, 6.032),
@@ -415,20 +331,134 @@ fn contraction_free_case() -> Result<CaseOutput, CaseError> {
             crack.temperature_step,
             20.9,
         ),
-        ("largest channel speed (every 0.01 s)", "m/s", speed, 0.0057),
+        (
+            "largest channel speed (every 0.01 s)",
+            "m/s",
+            run.speed,
+            0.0057,
+        ),
     ];
     for (what, unit, value, paper) in reported {
         out.rows.push(Row::reported(what, unit, value, paper));
     }
     out.notes = vec![
         format!(
-            "Case a of A-Sect. 6 as scenarios/bar_contraction_free.toml runs it: case b's bar and conditions, only the spheres within 1 mm of either end held, bonds T = {:.2} MPa, C = 5 T (thm calibrate's strength for 8.8 MPa, checked by dem/uniaxial_tension_bar), DEM masses x{CASE_A_DENSITY_SCALE}, pore pressures on the spheres through the cell corners with implicit undrained pore springs, the paper's mesher (A-Eq. 9). {steps} coupled steps, {rejected} retaken shorter, {} remeshes, {seconds:.0} s wall.",
+            "Case a of A-Sect. 6 as scenarios/bar_contraction_free.toml runs it: case b's bar and conditions, only the spheres within 1 mm of either end held, bonds T = {:.2} MPa, C = 5 T (thm calibrate's strength for 8.8 MPa, checked by dem/uniaxial_tension_bar), DEM masses x{CASE_A_DENSITY_SCALE}, pore pressures on the spheres through the cell corners with implicit undrained pore springs, the paper's mesher (A-Eq. 9). {} coupled steps, {} retaken shorter, {} remeshes, {seconds:.0} s wall.",
             CASE_A_BOND_TENSILE_STRENGTH / 1e6,
+            run.steps,
+            run.rejected,
             s.remeshes
         ),
         "Reported, not checked (docs/cases/bar_contraction_free.md analyses each gap): the packing of A-Fig. 8 cannot be rebuilt and the crack pattern depends on it; the paper states 328.1 K in one place and 333.44 K in another for the largest temperature; its bond tension (29.3 N) is for A-Table 1's bonds, which break at a lower load than the calibrated ones; the channel speed is the largest of any channel, gas included.".into(),
     ];
     Ok(out)
+}
+
+/// Case a's bar (A-Sect. 6) with its stepper and coupling-step rule, the DEM masses scaled
+/// by `CASE_A_DENSITY_SCALE`; `bond_strength`, when given, replaces A-Table 1's tensile
+/// strength `T` (cohesion `5 T`).
+fn case_a_bar(
+    bond_strength: Option<f64>,
+) -> Result<(PoreScaleState, PoreScaleStepper<WaterAir>, CouplingStepRule), CaseError> {
+    let err = CaseError::from_display;
+    let case = BarCase::ContractionFree;
+    let mut params = bar_params(case, 32);
+    params.dem.time_step *= CASE_A_DENSITY_SCALE.sqrt();
+    if let Some(t) = bond_strength {
+        params.contact.tensile_strength = t;
+        params.contact.cohesion = 5.0 * t;
+    }
+    let config = params.validate().map_err(err)?;
+    let mut s = bar_state(case, &config, BAR_SEED, &water_air()).map_err(err)?;
+    scale_sphere_density(&mut s, CASE_A_DENSITY_SCALE).map_err(err)?;
+    let rule = case_a_coupling_step().validate().map_err(err)?;
+    let stepper = PoreScaleStepper::new(config, water_air(), &s).map_err(err)?;
+    Ok((s, stepper, rule))
+}
+
+/// What a case-a run gives, sampled at the end of every interval.
+struct CaseARun {
+    steps: u64,
+    rejected: u64,
+    /// Largest |Δm| / m of the liquid and of the gas.
+    mass_drift: [f64; 2],
+    /// Largest distance of a temperature outside [end, initial] \[K\] (≤ 0 inside).
+    beyond: f64,
+    /// Largest intact-bond tension before the first break \[N\].
+    tension: f64,
+    /// End of the interval in which the first break was seen \[s\] (NaN if none).
+    first_break: f64,
+    /// Largest channel speed, gas included \[m/s\].
+    speed: f64,
+}
+
+/// Advances case a's bar to `t_end` in intervals of `interval` \[s\].
+fn run_case_a(
+    s: &mut PoreScaleState,
+    stepper: &mut PoreScaleStepper<WaterAir>,
+    rule: &CouplingStepRule,
+    t_end: f64,
+    interval: f64,
+) -> Result<CaseARun, CaseError> {
+    let case = BarCase::ContractionFree;
+    let (end_t, initial_t) = (case.end_temperature(), case.initial_temperature());
+    let start = [s.liquid_mass(), s.gas_mass()];
+    let mut run = CaseARun {
+        steps: 0,
+        rejected: 0,
+        mass_drift: [0.0; 2],
+        beyond: 0.0,
+        tension: 0.0,
+        first_break: f64::NAN,
+        speed: 0.0,
+    };
+    let intervals = (t_end / interval).round() as usize;
+    for _ in 0..intervals {
+        let r = stepper
+            .advance(s, interval, rule)
+            .map_err(CaseError::from_display)?;
+        run.steps += r.steps;
+        run.rejected += r.rejected;
+        for (k, m) in [s.liquid_mass(), s.gas_mass()].into_iter().enumerate() {
+            run.mass_drift[k] = run.mass_drift[k].max(((m - start[k]) / start[k]).abs());
+        }
+        for &t in &s.heat.temperature {
+            run.beyond = run.beyond.max(t - initial_t).max(end_t - t);
+        }
+        if s.dem.bond_breaks.is_empty() {
+            run.tension = run.tension.max(largest_bond_tension(s));
+        } else if run.first_break.is_nan() {
+            run.first_break = s.time;
+        }
+        run.speed = stepper
+            .channel_speeds(s)
+            .into_iter()
+            .fold(run.speed, f64::max);
+    }
+    Ok(run)
+}
+
+impl CaseARun {
+    /// The checks that hold at every moment of case a: both phase masses kept (closed
+    /// ends) and every temperature within the initial and the end temperature.
+    fn conservation_rows(&self, out: &mut CaseOutput, t_end: f64, interval: f64) {
+        let case = BarCase::ContractionFree;
+        let (end_t, initial_t) = (case.end_temperature(), case.initial_temperature());
+        for (k, what) in ["liquid mass", "gas mass"].iter().enumerate() {
+            out.rows.push(Row::at_most(
+                format!("closed ends: max |Δ{what}| / {what} over {t_end} s (every {interval} s)"),
+                "",
+                self.mass_drift[k],
+                1e-12,
+            ));
+        }
+        out.rows.push(Row::at_most(
+            format!("largest temperature outside [{end_t}, {initial_t}] K"),
+            "K",
+            self.beyond.max(0.0),
+            1e-9,
+        ));
+    }
 }
 
 /// What one run of A-Sect. 6 case b gives at 17 s.
