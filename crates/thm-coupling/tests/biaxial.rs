@@ -90,7 +90,11 @@ fn bad_parameters_name_the_field() {
     let mut t = tiny(10);
     t.points_per_cell = 1;
     let e = BiaxialModel::new(&t).unwrap_err().to_string();
-    assert!(e.contains("points_per_cell"), "{e}");
+    assert!(e.contains("points_per_cell") && e.contains("[2, 8]"), "{e}");
+    let mut t = tiny(10);
+    t.cells[0] = 10_001;
+    let e = BiaxialModel::new(&t).unwrap_err().to_string();
+    assert!(e.contains("cells[0]") && e.contains("[1, 10000]"), "{e}");
     let mut t = tiny(10);
     t.height = 3.0;
     let e = BiaxialModel::new(&t).unwrap_err().to_string();

@@ -199,6 +199,16 @@ fn paper_setup_is_valid_and_bad_fields_name_themselves() {
     let mut bad = t;
     bad.pic_fraction = f64::NAN;
     assert_eq!(field_of(&bad), "pic_fraction");
+    let mut bad = t;
+    bad.runout_cells = 0;
+    assert!(matches!(
+        bad.validate(),
+        Err(MultiscaleError::InvalidParameter {
+            field: "runout_cells",
+            allowed: "[1, 100000]",
+            ..
+        })
+    ));
 }
 
 /// A rank-one fabric conductivity (one heat pipe) whose rounding left `k_xx k_yy < k_xy²` is

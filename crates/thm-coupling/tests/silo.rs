@@ -132,6 +132,16 @@ fn paper_setup_is_valid_and_bad_fields_name_themselves() {
     let mut bad = t;
     bad.plate_speed = -1.0;
     assert_eq!(field_of(&bad), "plate_speed");
+    let mut bad = t;
+    bad.disks = 1;
+    assert!(matches!(
+        bad.validate(),
+        Err(MultiscaleError::InvalidParameter {
+            field: "disks",
+            allowed: "[2, 1000000]",
+            ..
+        })
+    ));
 }
 
 /// Runs the verification case `name` and asserts that it passed.

@@ -74,7 +74,9 @@ use thm_rve::{ConsolidationParams, PackingParams, RveParams, RveState, consolida
 use super::distributed::{self, SharedDistribution};
 use super::error::MultiscaleError;
 use super::material::{RveMaterial, RvePoint};
-use super::params::{DemTimeRule, MultiscaleParams, QuasiStaticLimits};
+use super::params::{
+    DemTimeRule, MultiscaleParams, QuasiStaticLimits, check_counts, check_positive,
+};
 
 fn default_bond_shear_ratio() -> f64 {
     0.5
@@ -287,30 +289,13 @@ impl BiaxialTest {
             ("specific_heat", self.specific_heat),
             ("conductivity", self.conductivity),
         ];
-        for (field, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(MultiscaleError::InvalidParameter {
-                    field,
-                    value: v,
-                    allowed: "(0, inf)",
-                });
-            }
-        }
-        let counts = [
-            ("cells[0]", self.cells[0], 1, 10_000),
-            ("cells[1]", self.cells[1], 1, 10_000),
-            ("points_per_cell", self.points_per_cell, 2, 8),
-            ("disks", self.disks, 2, 1_000_000),
-        ];
-        for (field, v, lo, hi) in counts {
-            if v < lo || v > hi {
-                return Err(MultiscaleError::InvalidParameter {
-                    field,
-                    value: v as f64,
-                    allowed: "a count in the documented range",
-                });
-            }
-        }
+        check_positive(&positive)?;
+        check_counts(&[
+            ("cells[0]", self.cells[0], 1, 10_000, "[1, 10000]"),
+            ("cells[1]", self.cells[1], 1, 10_000, "[1, 10000]"),
+            ("points_per_cell", self.points_per_cell, 2, 8, "[2, 8]"),
+            ("disks", self.disks, 2, 1_000_000, "[2, 1000000]"),
+        ])?;
         let h = self.cell_size();
         let hy = self.height / self.cells[1] as f64;
         if (h - hy).abs() > 1e-9 * h {

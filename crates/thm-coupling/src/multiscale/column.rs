@@ -74,7 +74,7 @@ use std::sync::Arc;
 use super::distributed::{self, SharedDistribution};
 use super::error::MultiscaleError;
 use super::material::{RveMaterial, RvePoint};
-use super::params::{DemTimeRule, MultiscaleParams};
+use super::params::{DemTimeRule, MultiscaleParams, check_counts, check_positive};
 
 /// Parameters of the column collapse (SI; temperatures in °C on the MPM side).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -248,31 +248,14 @@ impl ColumnTest {
             ("conductivity", self.conductivity),
             ("collapse_time", self.collapse_time),
         ];
-        for (field, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(MultiscaleError::InvalidParameter {
-                    field,
-                    value: v,
-                    allowed: "(0, inf)",
-                });
-            }
-        }
-        let counts = [
-            ("cells[0]", self.cells[0], 1, 10_000),
-            ("cells[1]", self.cells[1], 1, 10_000),
-            ("points_per_cell", self.points_per_cell, 1, 8),
-            ("runout_cells", self.runout_cells, 1, 100_000),
-            ("disks", self.disks, 2, 1_000_000),
-        ];
-        for (field, v, lo, hi) in counts {
-            if v < lo || v > hi {
-                return Err(MultiscaleError::InvalidParameter {
-                    field,
-                    value: v as f64,
-                    allowed: "a count in the documented range",
-                });
-            }
-        }
+        check_positive(&positive)?;
+        check_counts(&[
+            ("cells[0]", self.cells[0], 1, 10_000, "[1, 10000]"),
+            ("cells[1]", self.cells[1], 1, 10_000, "[1, 10000]"),
+            ("points_per_cell", self.points_per_cell, 1, 8, "[1, 8]"),
+            ("runout_cells", self.runout_cells, 1, 100_000, "[1, 100000]"),
+            ("disks", self.disks, 2, 1_000_000, "[2, 1000000]"),
+        ])?;
         let h = self.cell_size();
         if (h - self.height / self.cells[1] as f64).abs() > 1e-9 * h {
             return Err(MultiscaleError::InvalidParameter {

@@ -89,6 +89,37 @@ fn check(
     }
 }
 
+/// The first of `fields` that is not finite and positive, as an error naming it.
+pub(crate) fn check_positive(fields: &[(&'static str, f64)]) -> Result<(), MultiscaleError> {
+    for &(field, value) in fields {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(MultiscaleError::InvalidParameter {
+                field,
+                value,
+                allowed: "(0, inf)",
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The first of `counts` outside its range `[lo, hi]`, as an error naming it and the range
+/// (`allowed`, the range in words).
+pub(crate) fn check_counts(
+    counts: &[(&'static str, usize, usize, usize, &'static str)],
+) -> Result<(), MultiscaleError> {
+    for &(field, value, lo, hi, allowed) in counts {
+        if !(lo..=hi).contains(&value) {
+            return Err(MultiscaleError::InvalidParameter {
+                field,
+                value: value as f64,
+                allowed,
+            });
+        }
+    }
+    Ok(())
+}
+
 impl MultiscaleParams {
     /// Validates every field once, naming the first one out of range (as its key path).
     pub fn validate(&self) -> Result<MultiscaleConfig, MultiscaleError> {

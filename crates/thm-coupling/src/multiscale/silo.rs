@@ -49,7 +49,7 @@ use super::column::{ColumnPacking, consolidated_packing, reduce_cells};
 use super::distributed::{self, SharedDistribution};
 use super::error::MultiscaleError;
 use super::material::{RveMaterial, RvePoint};
-use super::params::{DemTimeRule, MultiscaleParams};
+use super::params::{DemTimeRule, MultiscaleParams, check_counts, check_positive};
 
 /// Parameters of the silo discharge (SI; temperatures in °C on the MPM side).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -221,11 +221,7 @@ impl SiloTest {
             ("conductivity", self.conductivity),
             ("discharge_time", self.discharge_time),
         ];
-        for (field, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return bad(field, v, "(0, inf)");
-            }
-        }
+        check_positive(&positive)?;
         if self.opening >= self.width {
             return bad("opening", self.opening, "(0, width)");
         }
@@ -280,15 +276,10 @@ impl SiloTest {
                 return bad(field, v, allowed);
             }
         }
-        let counts = [
-            ("points_per_cell", self.points_per_cell, 1, 8),
-            ("disks", self.disks, 2, 1_000_000),
-        ];
-        for (field, v, lo, hi) in counts {
-            if v < lo || v > hi {
-                return bad(field, v as f64, "a count in the documented range");
-            }
-        }
+        check_counts(&[
+            ("points_per_cell", self.points_per_cell, 1, 8, "[1, 8]"),
+            ("disks", self.disks, 2, 1_000_000, "[2, 1000000]"),
+        ])?;
         // The opening and the silo must span whole cells, so that the lattice of points
         // fits the walls.
         for (field, v) in [("opening", self.opening), ("width", self.width)] {
