@@ -9,6 +9,10 @@
 //! dem_peer run-bed FILE STEPS DT THREADS        # linear spring + Coulomb, gravity, floor
 //! ```
 //!
+//! A `run-*` command followed by `--locality-order` renumbers the particles of the file with
+//! [`Packing::in_locality_order`] before the run (untimed, as LIGGGHTS sorts its atoms in the
+//! set-up of a run; it prints `locality_order_seconds S` last).
+//!
 //! `run-*` prints `particles steps seconds particle_steps_per_second` on its first line (the
 //! timed steps only, after one untimed step), then two lines that let a run be checked against
 //! the peer's:
@@ -53,7 +57,10 @@ fn arg<T: std::str::FromStr>(args: &[String], i: usize, what: &str) -> Result<T,
 }
 
 fn run() -> Result<(), String> {
-    let args: Vec<String> = std::env::args().collect();
+    let mut args: Vec<String> = std::env::args().collect();
+    let flag = "--locality-order";
+    let locality_order = args.iter().any(|a| a == flag);
+    args.retain(|a| a != flag);
     let cmd = args.get(1).map(String::as_str).unwrap_or("");
     match cmd {
         "write-bar" => {
@@ -91,8 +98,13 @@ fn run() -> Result<(), String> {
             write_bed(Path::new(&args[2]), n)
         }
         "run-cohesive" | "run-bed" | "run-pull" => {
-            let packing = Packing::read_csv(Path::new(args.get(2).ok_or("missing FILE")?))
+            let mut packing = Packing::read_csv(Path::new(args.get(2).ok_or("missing FILE")?))
                 .map_err(|e| e.to_string())?;
+            let renumbering = locality_order.then(|| {
+                let start = Instant::now();
+                packing = packing.in_locality_order().0;
+                start.elapsed().as_secs_f64()
+            });
             let steps: u64 = arg(&args, 3, "STEPS")?;
             let dt: f64 = arg(&args, 4, "DT")?;
             let threads: usize = arg(&args, 5, "THREADS")?;
@@ -171,6 +183,9 @@ fn run() -> Result<(), String> {
                 println!("broken_bonds {broken}");
                 println!("free_kinetic_energy {free_kinetic_energy:.9e}");
                 println!("top_grip_force_y {top_force:.9e}");
+            }
+            if let Some(seconds) = renumbering {
+                println!("locality_order_seconds {seconds:.6}");
             }
             Ok(())
         }

@@ -82,7 +82,10 @@
 //! at a target porosity (`1 − Σ A_i/A` planar, `1 − Σ V_i/V` 3D; overlaps count twice), by
 //! growing particles in a frictionless DEM run between walls, and installs bonds stress-free
 //! at every pair closer than a given gap; [`packing::Packing`] reads and writes plain CSV
-//! (`particle,x,y,z,radius` and `bond,a,b` rows). The A-Sect. 3 bar (20 × 80 mm, 4–8 mm, 10 %)
+//! (`particle,x,y,z,radius` and `bond,a,b` rows); [`packing::Packing::in_locality_order`]
+//! renumbers a packing so that neighbours are close in index ([`packing::locality_order`]:
+//! cells in row-major order, the box's longest axis slowest), which keeps the contact pass in
+//! the caches on large beds (the stepper never renumbers the caller's particles). The A-Sect. 3 bar (20 × 80 mm, 4–8 mm, 10 %)
 //! holds about 49 spheres at 10 % porosity with uniform diameters (`0.9·1600 mm² / E[πd²/4]
 //! = 29.3 mm²`); the "40–45 spheres" of the specimen description correspond to 18–27 %.
 //! [`verification::cases`] holds the two-sphere restitution, the bond threshold and the

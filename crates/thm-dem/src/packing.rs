@@ -186,6 +186,39 @@ impl Packing {
         Ok(state)
     }
 
+    /// The packing with its particles renumbered so that particles close in space are close
+    /// in index (see [`locality_order`], cells of the largest diameter), and, for each new
+    /// index, the old one. Bonds follow their particles (each pair written `a < b`, sorted).
+    /// The physics does not depend on the numbering; the contact pass does: it reads the
+    /// second particle of every pair, and on a bed of 10⁵ spheres numbered along its widest
+    /// axis first that particle lies 10⁴ indices away, beyond the caches (the counterpart of
+    /// the atom sort that LAMMPS and LIGGGHTS make before a run).
+    pub fn in_locality_order(&self) -> (Packing, Vec<usize>) {
+        let largest = self.radii.iter().fold(0.0_f64, |m, &r| m.max(r));
+        let order = locality_order(&self.centres, 2.0 * largest);
+        let mut new_index = vec![0; order.len()];
+        for (new, &old) in order.iter().enumerate() {
+            new_index[old] = new;
+        }
+        let index = |i: usize| new_index.get(i).copied().unwrap_or(i);
+        let mut bonds: Vec<(usize, usize)> = self
+            .bonds
+            .iter()
+            .map(|&(a, b)| {
+                let (a, b) = (index(a), index(b));
+                (a.min(b), a.max(b))
+            })
+            .collect();
+        bonds.sort_unstable();
+        let packing = Packing {
+            kinematics: self.kinematics,
+            centres: order.iter().map(|&i| self.centres[i]).collect(),
+            radii: order.iter().map(|&i| self.radii[i]).collect(),
+            bonds,
+        };
+        (packing, order)
+    }
+
     /// Writes the packing as CSV: `particle,x,y,z,radius` and `bond,a,b` rows (SI units;
     /// numbers in Rust's shortest round-trip form, so reading gives the same bits).
     pub fn to_csv(&self) -> String {
@@ -505,6 +538,53 @@ pub fn area_porosity(
     }
     let empty = covered.iter().filter(|&&c| !c).count();
     Ok(empty as f64 / (nx * ny) as f64)
+}
+
+/// A numbering of the centres in which particles close in space are close in index: the
+/// centres are binned into cubic cells of edge `cell` \[m\] over their bounding box, the
+/// cells are taken in row-major order with the axis of fewest cells varying fastest and the
+/// axis of most cells slowest (ties in x, y, z order), and the centres of one cell keep their
+/// relative order. Returns, for each new index, the old one (a permutation of
+/// `0..centres.len()`).
+///
+/// A particle's neighbours then lie within about `n_fast · n_mid` cells of it in index, the
+/// cross-section of the box across its longest axis: for a bed of 100 × 100 × 10 particles,
+/// 10³ particles instead of the 10⁴ of a numbering along its width first. A `cell` that is not
+/// positive and finite, or centres that are not finite, leave the order as it is (identity).
+pub fn locality_order(centres: &[Vec3], cell: f64) -> Vec<usize> {
+    let identity: Vec<usize> = (0..centres.len()).collect();
+    let finite = centres
+        .iter()
+        .all(|c| c.x.is_finite() && c.y.is_finite() && c.z.is_finite());
+    if centres.is_empty() || !(cell > 0.0 && cell.is_finite()) || !finite {
+        return identity;
+    }
+    let axis = |c: &Vec3, k: usize| [c.x, c.y, c.z][k];
+    let lo: [f64; 3] =
+        std::array::from_fn(|k| centres.iter().fold(f64::INFINITY, |m, c| m.min(axis(c, k))));
+    let hi: [f64; 3] = std::array::from_fn(|k| {
+        centres
+            .iter()
+            .fold(f64::NEG_INFINITY, |m, c| m.max(axis(c, k)))
+    });
+    // Cells per axis, at most 2²⁰ (a key of three such indices fits a u64).
+    const MAX_CELLS: u64 = 1 << 20;
+    let cells: [u64; 3] = std::array::from_fn(|k| {
+        (((hi[k] - lo[k]) / cell) as u64)
+            .saturating_add(1)
+            .min(MAX_CELLS)
+    });
+    let mut axes = [0, 1, 2];
+    axes.sort_by_key(|&k| cells[k]);
+    let key = |c: &Vec3| {
+        axes.iter().rev().fold(0_u64, |key, &k| {
+            let i = (((axis(c, k) - lo[k]) / cell) as u64).min(cells[k] - 1);
+            key * cells[k] + i
+        })
+    };
+    let mut order = identity;
+    order.sort_by_key(|&i| key(&centres[i]));
+    order
 }
 
 /// A bonded packing for benchmarks: a jittered square (planar) or cubic (3D) lattice of

@@ -177,3 +177,133 @@ fn a_bad_packing_row_is_quoted_short_whatever_its_length() {
         .to_string();
     assert!(message.contains("`abc` is not a number"), "{message}");
 }
+
+/// Largest index distance `b − a` of the pairs closer than `gap`.
+fn index_reach(p: &Packing, gap: f64) -> usize {
+    let particles = ParticleState::new(p.kinematics, 2600.0, 293.15, &p.centres, &p.radii).unwrap();
+    neighbour::pairs_within(&particles, gap)
+        .iter()
+        .map(|&(a, b)| b - a)
+        .max()
+        .unwrap()
+}
+
+#[test]
+fn locality_order_numbers_a_slab_across_its_longest_axis() {
+    // 40 × 40 × 3 spheres numbered x first: a sphere's neighbour above it is 1 600 indices
+    // away. Renumbered with the thin axis fastest, every neighbour lies within one row of the
+    // 40 × 3 cross-section (120 particles; cells of the largest diameter hold at most two
+    // lattice sites along an axis, so allow twice that).
+    let p = lattice_packing(Kinematics::Spheres3d, [40, 40, 3], 1e-3, 3).unwrap();
+    let gap = 0.05e-3;
+    assert!(index_reach(&p, gap) >= 1600);
+    let (q, order) = p.in_locality_order();
+    let reach = index_reach(&q, gap);
+    eprintln!("index reach {} -> {reach}", index_reach(&p, gap));
+    assert!(reach <= 2 * 40 * 3, "{reach}");
+    // A permutation that carries every particle and every bond along.
+    let mut seen = vec![false; order.len()];
+    for (new, &old) in order.iter().enumerate() {
+        assert!(!std::mem::replace(&mut seen[old], true));
+        assert_eq!(q.centres[new], p.centres[old]);
+        assert_eq!(q.radii[new], p.radii[old]);
+    }
+    assert!(q.bonds.windows(2).all(|w| w[0] < w[1]));
+    assert!(q.bonds.iter().all(|&(a, b)| a < b));
+    let mut carried: Vec<(usize, usize)> = q
+        .bonds
+        .iter()
+        .map(|&(a, b)| (order[a].min(order[b]), order[a].max(order[b])))
+        .collect();
+    carried.sort_unstable();
+    assert_eq!(carried, p.bonds);
+}
+
+#[test]
+fn locality_order_leaves_what_it_cannot_bin_as_it_is() {
+    let c = [
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::ZERO,
+        Vec3::new(0.5, 0.0, 0.0),
+    ];
+    assert_eq!(locality_order(&c, 0.1), vec![1, 2, 0]);
+    for cell in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert_eq!(locality_order(&c, cell), vec![0, 1, 2]);
+    }
+    let nan = [Vec3::new(f64::NAN, 0.0, 0.0), Vec3::ZERO];
+    assert_eq!(locality_order(&nan, 0.1), vec![0, 1]);
+    assert!(locality_order(&[], 0.1).is_empty());
+}
+
+/// Kinetic energy and positions (old numbering) after `steps` steps of the bonded A-Table 1
+/// law, from velocities that are a function of position, so that both numberings start alike.
+fn run_bonded(p: &Packing, order: &[usize], steps: usize) -> (f64, Vec<Vec3>) {
+    let mut state = p.to_state(2600.0, 293.15).unwrap();
+    for (v, c) in state.particles.velocity.iter_mut().zip(&p.centres) {
+        let (x, y, z) = (c.x / 1e-3, c.y / 1e-3, c.z / 1e-3);
+        *v = Vec3::new((1.7 * x + y).sin(), (0.9 * y - z).cos(), (x * z).sin()) * 0.5;
+    }
+    let mut stepper = Stepper::new(table1(), stepper_params(1e-7, 0.0).validate().unwrap());
+    for _ in 0..steps {
+        stepper.step(&mut state).unwrap();
+    }
+    let mut x = vec![Vec3::ZERO; order.len()];
+    for (new, &old) in order.iter().enumerate() {
+        x[old] = state.particles.position[new];
+    }
+    (state.particles.kinetic_energy(), x)
+}
+
+#[test]
+fn a_renumbered_packing_moves_the_same() {
+    // Bonds stretched and compressed by a velocity field; the physics does not see the
+    // numbering, only the order of the force sums does (round-off).
+    let p = lattice_packing(Kinematics::Spheres3d, [12, 12, 3], 1e-3, 5).unwrap();
+    let identity: Vec<usize> = (0..p.radii.len()).collect();
+    let (q, order) = p.in_locality_order();
+    assert_ne!(order, identity);
+    let (ke_p, x_p) = run_bonded(&p, &identity, 400);
+    let (ke_q, x_q) = run_bonded(&q, &order, 400);
+    let dx = x_p
+        .iter()
+        .zip(&x_q)
+        .map(|(a, b)| (*a - *b).norm())
+        .fold(0.0, f64::max);
+    eprintln!("kinetic energy {ke_p:e} / {ke_q:e}, largest position difference {dx:e} m");
+    assert!(ke_p > 0.0);
+    assert!((ke_p - ke_q).abs() <= 1e-9 * ke_p);
+    assert!(dx <= 1e-12);
+}
+
+proptest::proptest! {
+    /// Any centres and cell: a permutation, and the cells come in the row-major order of their
+    /// indices (fewest-cell axis fastest), so a sphere's cell never precedes an earlier one's.
+    #[test]
+    fn locality_order_is_a_permutation_in_cell_order(
+        xyz in proptest::collection::vec((-1.0..1.0_f64, -1.0..1.0_f64, -0.2..0.2_f64), 0..200),
+        cell in 0.01..0.5_f64,
+    ) {
+        let centres: Vec<Vec3> = xyz.iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect();
+        let order = locality_order(&centres, cell);
+        let mut seen = vec![false; centres.len()];
+        for &i in &order {
+            proptest::prop_assert!(!std::mem::replace(&mut seen[i], true));
+        }
+        proptest::prop_assert!(seen.iter().all(|&s| s));
+        if centres.len() > 1 {
+            let lo = |k: usize| centres.iter().map(|c| [c.x, c.y, c.z][k]).fold(f64::INFINITY, f64::min);
+            let hi = |k: usize| centres.iter().map(|c| [c.x, c.y, c.z][k]).fold(f64::NEG_INFINITY, f64::max);
+            let cells: Vec<u64> = (0..3).map(|k| ((hi(k) - lo(k)) / cell) as u64 + 1).collect();
+            let mut axes = [0, 1, 2];
+            axes.sort_by_key(|&k| cells[k]);
+            let index = |i: usize| -> Vec<u64> {
+                let c = [centres[i].x, centres[i].y, centres[i].z];
+                axes.iter().rev().map(|&k| ((c[k] - lo(k)) / cell) as u64).collect()
+            };
+            for w in order.windows(2) {
+                let (a, b) = (index(w[0]), index(w[1]));
+                proptest::prop_assert!(a < b || (a == b && w[0] < w[1]));
+            }
+        }
+    }
+}
