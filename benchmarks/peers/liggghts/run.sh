@@ -11,11 +11,15 @@
 #   LOAD_MAX=0.05 REPEATS=3 KEEP_WORK=1 as in ../common.sh
 #   BED_DIR=DIR: take DIR/bedN.csv when it exists (written before by `dem_peer write-bed`;
 #   the 100 000-sphere bed takes 15 CPU minutes to settle) instead of settling it again
+#   ORDER=--locality-order (the default): ours renumbers the bed's spheres before the run
+#   (Packing::in_locality_order), as LIGGGHTS sorts its atoms spatially in the set-up of every
+#   run (atom_modify sort, on by default); ORDER= keeps the file's numbering
 set -euo pipefail
 SUDO=$([ "$(id -u)" = 0 ] || echo sudo)
 as_root=()
 if [ "$(id -u)" = 0 ]; then as_root=(--allow-run-as-root); fi
-STEPS=${1:-2000}; ROUNDS=${2:-3}; DT=5e-7
+STEPS=${1:-2000}; ROUNDS=${2:-3}; DT=5e-7; ORDER=${ORDER---locality-order}
+order=(); if [ -n "$ORDER" ]; then order=("$ORDER"); fi
 here=$(cd "$(dirname "$0")" && pwd); root=$(cd "$here/../../.." && pwd)
 # shellcheck source-path=SCRIPTDIR/.. source=common.sh
 . "$here/../common.sh"
@@ -55,7 +59,7 @@ for n in ${SIZES:-10000 100000}; do
     : > "$work/ours"; : > "$work/lig"
     for r in $(seq "$ROUNDS"); do
       quiet_run "bed $atoms, $p, round $r, ours" "$work/out" \
-        "$peer" run-bed "$work/bed$n.csv" "$STEPS" "$DT" "$p"
+        "$peer" run-bed "$work/bed$n.csv" "$STEPS" "$DT" "$p" "${order[@]}"
       # One assignment per substitution: set -e sees only the last one's status.
       o=$(rate "$work/out"); ob=$(field "$work/out" neighbour_builds)
       oe=$(field "$work/out" kinetic_energy)
