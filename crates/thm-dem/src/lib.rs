@@ -85,7 +85,9 @@
 //! (`particle,x,y,z,radius` and `bond,a,b` rows); [`packing::Packing::in_locality_order`]
 //! renumbers a packing so that neighbours are close in index ([`packing::locality_order`]:
 //! cells in row-major order, the box's longest axis slowest), which keeps the contact pass in
-//! the caches on large beds (the stepper never renumbers the caller's particles). The A-Sect. 3 bar (20 × 80 mm, 4–8 mm, 10 %)
+//! the caches on large beds; [`DemState::renumber`] applies such an order to a running state
+//! (histories mirrored where a pair changes order). The stepper never renumbers the caller's
+//! particles. The A-Sect. 3 bar (20 × 80 mm, 4–8 mm, 10 %)
 //! holds about 49 spheres at 10 % porosity with uniform diameters (`0.9·1600 mm² / E[πd²/4]
 //! = 29.3 mm²`); the "40–45 spheres" of the specimen description correspond to 18–27 %.
 //! [`verification::cases`] holds the two-sphere restitution, the bond threshold and the

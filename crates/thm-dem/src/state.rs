@@ -416,6 +416,16 @@ impl ContactList {
         self.report.clear();
     }
 
+    /// The list of these entries, sorted by pair.
+    fn sorted(mut entries: Vec<([u32; 2], ContactHistory, ContactReport)>) -> Self {
+        entries.sort_by_key(|e| e.0);
+        Self {
+            pair: entries.iter().map(|e| e.0).collect(),
+            history: entries.iter().map(|e| e.1).collect(),
+            report: entries.iter().map(|e| e.2).collect(),
+        }
+    }
+
     pub(crate) fn push(&mut self, pair: [u32; 2], history: ContactHistory) {
         self.pair.push(pair);
         self.history.push(history);
@@ -561,6 +571,96 @@ impl DemState {
         self.search_reference_position.clear();
         self.contact_generation += 1;
         Ok(count)
+    }
+
+    /// Renumbers the particles of a running state: particle `i` becomes the one that was
+    /// `order[i]` (e.g. [`crate::packing::locality_order`] of the current positions, as
+    /// LIGGGHTS sorts its atoms every 1 000 steps of a flowing bed). Every per-particle array,
+    /// the search reference, the bond-break records and both contact lists follow; a pair
+    /// whose particles change order is written `a < b` again with its history's shear force
+    /// and normal negated (both are taken on B, from A to B), so that the contact law sees
+    /// the same contact mirrored; the lists are sorted again and the contact generation
+    /// increments (a stepper rebuilds its contact index). The physics does not change; the
+    /// order of the force sums does (round-off).
+    ///
+    /// # Errors
+    /// [`DemError::InvalidParameter`] (`order`) unless `order` is a permutation of
+    /// `0..particle count`; the state is then unchanged.
+    pub fn renumber(&mut self, order: &[usize]) -> Result<(), DemError> {
+        let n = self.particles.len();
+        let bad = |value: usize| DemError::InvalidParameter {
+            field: "order",
+            value: value as f64,
+            allowed: "a permutation of 0..particle count (each index once)",
+        };
+        if order.len() != n {
+            return Err(bad(order.len()));
+        }
+        let mut new_index = vec![u32::MAX; n];
+        for (new, &old) in order.iter().enumerate() {
+            match new_index.get_mut(old) {
+                Some(slot) if *slot == u32::MAX => *slot = new as u32,
+                _ => return Err(bad(old)),
+            }
+        }
+        fn permute<T: Copy>(v: &mut Vec<T>, order: &[usize]) {
+            if v.len() == order.len() {
+                *v = order.iter().map(|&i| v[i]).collect();
+            }
+        }
+        let p = &mut self.particles;
+        permute(&mut p.position, order);
+        permute(&mut p.velocity, order);
+        permute(&mut p.angular_velocity, order);
+        permute(&mut p.radius, order);
+        permute(&mut p.reference_radius, order);
+        permute(&mut p.mass, order);
+        permute(&mut p.inertia, order);
+        permute(&mut p.fixed, order);
+        permute(&mut p.external_force, order);
+        permute(&mut p.external_torque, order);
+        permute(&mut p.temperature, order);
+        permute(&mut p.force, order);
+        permute(&mut p.torque, order);
+        permute(&mut self.search_reference_position, order);
+        permute(&mut self.search_reference_radius, order);
+        let renamed = |i: u32| new_index.get(i as usize).copied().unwrap_or(i);
+        for e in &mut self.bond_breaks {
+            let (a, b) = (renamed(e.a), renamed(e.b));
+            (e.a, e.b) = (a.min(b), a.max(b));
+        }
+        let old = std::mem::take(&mut self.contacts);
+        let entries: Vec<([u32; 2], ContactHistory, ContactReport)> = old
+            .pair
+            .iter()
+            .zip(&old.history)
+            .zip(&old.report)
+            .map(|((&[a, b], &h), &r)| {
+                let (a, b) = (renamed(a), renamed(b));
+                if a < b {
+                    ([a, b], h, r)
+                } else {
+                    let mirrored = ContactHistory {
+                        shear_force: -h.shear_force,
+                        normal: -h.normal,
+                        ..h
+                    };
+                    ([b, a], mirrored, r)
+                }
+            })
+            .collect();
+        self.contacts = ContactList::sorted(entries);
+        let old = std::mem::take(&mut self.wall_contacts);
+        let entries: Vec<([u32; 2], ContactHistory, ContactReport)> = old
+            .pair
+            .iter()
+            .zip(&old.history)
+            .zip(&old.report)
+            .map(|((&[a, w], &h), &r)| ([renamed(a), w], h, r))
+            .collect();
+        self.wall_contacts = ContactList::sorted(entries);
+        self.contact_generation += 1;
+        Ok(())
     }
 
     /// Bonded pairs `(a, b)` as installed (intact or broken).

@@ -307,3 +307,94 @@ proptest::proptest! {
         }
     }
 }
+
+/// A bonded lattice under a velocity field (a function of position) after `steps` steps.
+fn stirred_lattice(speed: f64) -> DemState {
+    let p = lattice_packing(Kinematics::Spheres3d, [10, 10, 4], 1e-3, 9).unwrap();
+    let mut state = p.to_state(2600.0, 293.15).unwrap();
+    for (v, c) in state.particles.velocity.iter_mut().zip(&p.centres) {
+        let (x, y, z) = (c.x / 1e-3, c.y / 1e-3, c.z / 1e-3);
+        *v = Vec3::new((1.7 * x + y).sin(), (0.9 * y - z).cos(), (x * z).sin()) * speed;
+    }
+    state
+}
+
+#[test]
+fn a_running_state_renumbered_moves_the_same() {
+    // Reversed, every pair changes order (its history is mirrored); in locality order of the
+    // current positions, some do. The stepper that advanced the state goes on after the
+    // renumbering (its contact index and bounds must follow).
+    let law = table1();
+    // A skin wide enough that no search runs after the renumbering, where a search would
+    // rebuild the contact index anyway.
+    let params = || {
+        let mut p = stepper_params(1e-7, 0.0);
+        p.verlet_skin = 1.5e-3;
+        p.validate().unwrap()
+    };
+    let mut reference = stirred_lattice(8.0);
+    let mut stepper = Stepper::new(law, params());
+    stepper.run(&mut reference, 200).unwrap();
+    let n = reference.particles.len();
+    let reversed: Vec<usize> = (0..n).rev().collect();
+    let local = locality_order(&reference.particles.position, 2e-3);
+    let mut renumbered = Vec::new();
+    for order in [reversed, local] {
+        let mut state = stirred_lattice(8.0);
+        let mut s = Stepper::new(law, params());
+        s.run(&mut state, 200).unwrap();
+        assert_eq!(state, reference);
+        state.renumber(&order).unwrap();
+        renumbered.push((state, order, s));
+    }
+    stepper.run(&mut reference, 400).unwrap();
+    let broken = reference.contacts.broken_bond_count();
+    assert!(broken > 0 && reference.contacts.intact_bond_count() > 0);
+    let ke = reference.particles.kinetic_energy();
+    for (mut state, order, mut s) in renumbered {
+        s.run(&mut state, 400).unwrap();
+        let dx = order
+            .iter()
+            .enumerate()
+            .map(|(new, &old)| {
+                (state.particles.position[new] - reference.particles.position[old]).norm()
+            })
+            .fold(0.0, f64::max);
+        let dke = (state.particles.kinetic_energy() - ke).abs() / ke;
+        eprintln!("{broken} bonds broken; position difference {dx:e} m, energy {dke:e}");
+        assert!(dx <= 1e-12 && dke <= 1e-9);
+        assert_eq!(state.contacts.broken_bond_count(), broken);
+        assert_eq!(state.bond_breaks.len(), reference.bond_breaks.len());
+        for e in &state.bond_breaks {
+            let (a, b) = (order[e.a as usize], order[e.b as usize]);
+            let pair = (a.min(b) as u32, a.max(b) as u32);
+            assert!(
+                reference
+                    .bond_breaks
+                    .iter()
+                    .any(|r| (r.a, r.b) == pair && r.step == e.step)
+            );
+        }
+    }
+}
+
+#[test]
+fn renumbering_rejects_what_is_not_a_permutation() {
+    let state = stirred_lattice(1.0);
+    let n = state.particles.len();
+    let mut repeated: Vec<usize> = (0..n).collect();
+    repeated[3] = 2;
+    let mut beyond: Vec<usize> = (0..n).collect();
+    beyond[0] = n;
+    for order in [vec![0; n - 1], repeated, beyond] {
+        let mut s = state.clone();
+        match s.renumber(&order) {
+            Err(DemError::InvalidParameter { field, allowed, .. }) => {
+                assert_eq!(field, "order");
+                assert!(allowed.contains("permutation"));
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(s, state);
+    }
+}
