@@ -416,8 +416,18 @@ impl ContactList {
         self.report.clear();
     }
 
-    /// The list of these entries, sorted by pair.
-    fn sorted(mut entries: Vec<([u32; 2], ContactHistory, ContactReport)>) -> Self {
+    /// The list with each entry's pair and history replaced by `rename`'s, sorted by pair again
+    /// (the reports follow their entries).
+    fn renamed(
+        &self,
+        rename: impl Fn([u32; 2], ContactHistory) -> ([u32; 2], ContactHistory),
+    ) -> Self {
+        let mut entries: Vec<([u32; 2], ContactHistory, ContactReport)> = (0..self.len())
+            .map(|k| {
+                let (pair, history) = rename(self.pair[k], self.history[k]);
+                (pair, history, self.report[k])
+            })
+            .collect();
         entries.sort_by_key(|e| e.0);
         Self {
             pair: entries.iter().map(|e| e.0).collect(),
@@ -629,36 +639,20 @@ impl DemState {
             let (a, b) = (renamed(e.a), renamed(e.b));
             (e.a, e.b) = (a.min(b), a.max(b));
         }
-        let old = std::mem::take(&mut self.contacts);
-        let entries: Vec<([u32; 2], ContactHistory, ContactReport)> = old
-            .pair
-            .iter()
-            .zip(&old.history)
-            .zip(&old.report)
-            .map(|((&[a, b], &h), &r)| {
-                let (a, b) = (renamed(a), renamed(b));
-                if a < b {
-                    ([a, b], h, r)
-                } else {
-                    let mirrored = ContactHistory {
-                        shear_force: -h.shear_force,
-                        normal: -h.normal,
-                        ..h
-                    };
-                    ([b, a], mirrored, r)
-                }
-            })
-            .collect();
-        self.contacts = ContactList::sorted(entries);
-        let old = std::mem::take(&mut self.wall_contacts);
-        let entries: Vec<([u32; 2], ContactHistory, ContactReport)> = old
-            .pair
-            .iter()
-            .zip(&old.history)
-            .zip(&old.report)
-            .map(|((&[a, w], &h), &r)| ([renamed(a), w], h, r))
-            .collect();
-        self.wall_contacts = ContactList::sorted(entries);
+        self.contacts = self.contacts.renamed(|[a, b], h| {
+            let (a, b) = (renamed(a), renamed(b));
+            if a < b {
+                ([a, b], h)
+            } else {
+                let mirrored = ContactHistory {
+                    shear_force: -h.shear_force,
+                    normal: -h.normal,
+                    ..h
+                };
+                ([b, a], mirrored)
+            }
+        });
+        self.wall_contacts = self.wall_contacts.renamed(|[a, w], h| ([renamed(a), w], h));
         self.contact_generation += 1;
         Ok(())
     }
