@@ -398,3 +398,44 @@ fn renumbering_rejects_what_is_not_a_permutation() {
         assert_eq!(s, state);
     }
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(32))]
+    /// Any renumbering of a stepped state keeps every particle's data and every contact's
+    /// force exactly: a contact whose pair changed order reports the negated force on its
+    /// new B, i.e. the same force on the same particle.
+    #[test]
+    fn renumbering_keeps_every_particle_and_contact_force(
+        keys in proptest::collection::vec(0..u32::MAX, 160),
+    ) {
+        let p = lattice_packing(Kinematics::Spheres3d, [8, 5, 4], 1e-3, 2).unwrap();
+        let mut state = p.to_state(2600.0, 293.15).unwrap();
+        for (v, c) in state.particles.velocity.iter_mut().zip(&p.centres) {
+            *v = Vec3::new((c.y / 1e-3).sin(), (c.z / 1e-3).cos(), (c.x / 1e-3).sin()) * 5.0;
+        }
+        Stepper::new(table1(), stepper_params(1e-7, 0.0).validate().unwrap())
+            .run(&mut state, 50)
+            .unwrap();
+        let mut order: Vec<usize> = (0..keys.len()).collect();
+        order.sort_by_key(|&i| (keys[i], i));
+        let mut renumbered = state.clone();
+        renumbered.renumber(&order).unwrap();
+        for (new, &old) in order.iter().enumerate() {
+            proptest::prop_assert_eq!(renumbered.particles.position[new], state.particles.position[old]);
+            proptest::prop_assert_eq!(renumbered.particles.velocity[new], state.particles.velocity[old]);
+            proptest::prop_assert_eq!(renumbered.particles.radius[new], state.particles.radius[old]);
+        }
+        proptest::prop_assert_eq!(renumbered.contacts.len(), state.contacts.len());
+        proptest::prop_assert!(renumbered.contacts.pair.windows(2).all(|w| w[0] < w[1]));
+        for k in 0..renumbered.contacts.len() {
+            let [a, b] = renumbered.contacts.pair[k];
+            let (oa, ob) = (order[a as usize] as u32, order[b as usize] as u32);
+            let key = [oa.min(ob), oa.max(ob)];
+            let j = state.contacts.pair.binary_search(&key).unwrap();
+            let force = renumbered.contacts.force_on_b(k);
+            let expected = if oa < ob { state.contacts.force_on_b(j) } else { -state.contacts.force_on_b(j) };
+            proptest::prop_assert_eq!(force, expected);
+            proptest::prop_assert_eq!(renumbered.contacts.history[k].bond, state.contacts.history[j].bond);
+        }
+    }
+}
