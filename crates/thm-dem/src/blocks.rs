@@ -10,12 +10,15 @@
 //! too: then it goes to the contact's spill entry, and the gather sums the spill entries
 //! in contact order. Both give the same bits: a running sum in contact order from +0.
 //!
-//! On several threads the blocks are cut into as many contiguous runs as threads, with
-//! about equal numbers of contacts; each thread takes the next run and does, in order,
-//! contact `c` and, unless a contact of an earlier run reaches block `c` (the run's "zone",
-//! a prefix of it about one layer of particles long), gather `c`; then it waits until every
-//! earlier run's contacts are done and gathers its zone. Spill entries are written only for
-//! the contacts that reach a zone, and a thread reads what another wrote only there.
+//! On several threads the blocks are cut into as many contiguous runs as threads; each
+//! thread takes the next run and does, in order, contact `c` and, unless a contact of an
+//! earlier run reaches block `c` (the run's "zone", a prefix of it about one layer of
+//! particles long), gather `c`; then it waits until every earlier run's contacts are done
+//! and gathers its zone. Spill entries are written only for the contacts that reach a zone,
+//! and a thread reads what another wrote only there. The runs are cut where the blocks'
+//! costs in the last call (contact and gather timed apart) give each run the same work
+//! before its zone gathers, which wait for the earlier runs and are shared by all threads
+//! at the end (see [`Costs::cut`]).
 //!
 //! A waiting thread spins, then yields its core between polls (the run it waits for may
 //! have lost its core on a loaded machine): a rayon worker that sleeps costs a futex wake
@@ -357,28 +360,24 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
         zone,
         progress,
         next_zone,
-        cost,
+        contact_cost,
+        gather_cost,
     } = scratch;
-    if cost.len() != blocks {
-        cost.clear();
-        cost.resize_with(blocks, || AtomicU64::new(1));
+    if contact_cost.len() != blocks {
+        contact_cost.clear();
+        contact_cost.resize_with(blocks, || AtomicU64::new(1));
+        gather_cost.clear();
+        gather_cost.resize_with(blocks, || AtomicU64::new(0));
     }
-    // Runs of about equal cost in the last call (equal block counts at first).
-    let total: u64 = cost.iter().map(|c| c.load(Ordering::Relaxed).max(1)).sum();
-    bound.clear();
-    bound.push(0);
-    let mut sum = 0_u64;
-    let mut c = 0;
-    for t in 1..threads {
-        let target = total * t as u64 / threads as u64;
-        while c < blocks && sum + cost[c].load(Ordering::Relaxed).max(1) / 2 < target {
-            sum += cost[c].load(Ordering::Relaxed).max(1);
-            c += 1;
-        }
-        let last = bound[t - 1];
-        bound.push(c.clamp(last + 1, blocks - (threads - t)));
-    }
-    bound.push(blocks);
+    let costs = Costs {
+        layout,
+        contact: contact_cost,
+        gather: gather_cost,
+    };
+    // The zone gathers wait for the earlier runs and are shared at the end, so the runs are
+    // cut to equal costs without them; their cost depends on the cut, hence a second cut.
+    let deferred = costs.cut(threads, 0, bound);
+    costs.cut(threads, deferred, bound);
     // Zones: the largest reach of every earlier run.
     zone.clear();
     let mut reach = 0_usize;
@@ -395,12 +394,13 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
     progress.resize_with(threads, || AtomicUsize::new(0));
     next_zone.truncate(0);
     next_zone.extend(bound[..threads].iter().map(|&b| AtomicUsize::new(b)));
-    let (bound, zone, progress, next_zone, cost) = (
+    let (bound, zone, progress, next_zone, contact_cost, gather_cost) = (
         &bound[..],
         &zone[..],
         &progress[..],
         &next_zone[..],
-        &cost[..],
+        &contact_cost[..],
+        &gather_cost[..],
     );
     let contact = |t: usize, c: usize, data: S| {
         let p = layout.particles(c);
@@ -476,15 +476,12 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
             while let Some((c, block)) = take_front(&mut run) {
                 let started = Instant::now();
                 contact(t, c, block);
-                let in_zone = zone_blocks.contains(&c);
-                if in_zone {
-                    // Its gather (timed by whoever runs it) adds to this.
-                    cost[c].store(nanos(started), Ordering::Relaxed);
-                }
+                let contact_done = Instant::now();
+                contact_cost[c].store(elapsed(started, contact_done), Ordering::Relaxed);
                 progress[t].store(c + 1 - bound[t], Ordering::Release);
-                if !in_zone {
+                if !zone_blocks.contains(&c) {
                     gather(t, c);
-                    cost[c].store(nanos(started), Ordering::Relaxed);
+                    gather_cost[c].store(nanos(contact_done), Ordering::Relaxed);
                 }
             }
             runs_finished.fetch_add(1, Ordering::Release);
@@ -515,7 +512,7 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
                         {
                             let started = Instant::now();
                             gather(t, j);
-                            cost[j].fetch_add(nanos(started), Ordering::Relaxed);
+                            gather_cost[j].store(nanos(started), Ordering::Relaxed);
                             zones_finished.fetch_add(1, Ordering::Release);
                             took = true;
                         }
@@ -540,7 +537,79 @@ pub(crate) fn contacts_then_gathers<S: BlockRun>(
 
 /// Nanoseconds since `t`.
 fn nanos(t: Instant) -> u64 {
-    u64::try_from(t.elapsed().as_nanos()).unwrap_or(u64::MAX)
+    elapsed(t, Instant::now())
+}
+
+/// Nanoseconds from `t` to `u`.
+fn elapsed(t: Instant, u: Instant) -> u64 {
+    u64::try_from(u.saturating_duration_since(t).as_nanos()).unwrap_or(u64::MAX)
+}
+
+/// The blocks' costs in the last call, and where they cut the runs.
+struct Costs<'a> {
+    layout: Layout<'a>,
+    contact: &'a [AtomicU64],
+    gather: &'a [AtomicU64],
+}
+
+impl Costs<'_> {
+    /// Block `c`'s contact and gather costs in the last call (a contact at least 1 ns).
+    fn of(&self, c: usize) -> (u64, u64) {
+        (
+            self.contact[c].load(Ordering::Relaxed).max(1),
+            self.gather[c].load(Ordering::Relaxed),
+        )
+    }
+
+    /// Cuts the blocks into `threads` runs (`bound[t]..bound[t + 1]`, none empty) such that
+    /// each run's cost without its zone gathers is about `1/threads` of the total less
+    /// `deferred` (the zone gathers' cost, shared by all threads once the runs are done);
+    /// returns the cost of this cut's zone gathers.
+    ///
+    /// With a run's own work `X` each and zone gathers `Z` in all, the last thread is done
+    /// at about `X + Z / threads`, the total over the threads; runs of equal total cost
+    /// instead leave the threads with zones idle for their zone gathers' cost while the
+    /// earlier runs finish.
+    fn cut(&self, threads: usize, deferred: u64, bound: &mut Vec<usize>) -> u64 {
+        let blocks = self.layout.blocks();
+        let total: u64 = (0..blocks).map(|c| self.of(c).0 + self.of(c).1).sum();
+        let own = total.saturating_sub(deferred);
+        bound.clear();
+        bound.push(0);
+        // Over the runs so far: the work outside zones, the zone gathers, the largest reach
+        // (whose block ends the current run's zone).
+        let (mut sum, mut zone_gathers, mut reach) = (0_u64, 0_u64, 0_usize);
+        let mut zone_end = 0;
+        let mut c = 0;
+        for t in 1..=threads {
+            let target = if t == threads {
+                u64::MAX
+            } else {
+                own * t as u64 / threads as u64
+            };
+            loop {
+                if c >= blocks {
+                    break;
+                }
+                let (k, g) = self.of(c);
+                let weight = if c < zone_end { k } else { k + g };
+                let last_allowed = blocks - (threads - t);
+                // At least one block per run, and one left for each later run.
+                if c > bound[t - 1] && (c >= last_allowed || sum + weight / 2 >= target) {
+                    break;
+                }
+                sum += weight;
+                if c < zone_end {
+                    zone_gathers += g;
+                }
+                reach = reach.max(self.layout.reach[c] as usize);
+                c += 1;
+            }
+            bound.push(c);
+            zone_end = reach.div_ceil(self.layout.block).max(c);
+        }
+        zone_gathers
+    }
 }
 
 /// Polls for another thread's progress: spins, then yields its core between polls, and
@@ -582,9 +651,10 @@ pub(crate) struct Stages {
     zone: Vec<usize>,
     progress: Vec<AtomicUsize>,
     next_zone: Vec<AtomicUsize>,
-    /// Per block: the time its contact and gather took in the last call \[ns\] (where the
-    /// runs are cut; only the speed depends on it).
-    cost: Vec<AtomicU64>,
+    /// Per block: the time its contact and its gather took in the last call \[ns\] (where
+    /// the runs are cut; only the speed depends on them).
+    contact_cost: Vec<AtomicU64>,
+    gather_cost: Vec<AtomicU64>,
 }
 
 #[cfg(test)]
@@ -775,6 +845,95 @@ mod tests {
                         run(threads, parallel, len, span, 3);
                     }
                 }
+            }
+        }
+    }
+
+    /// The cut of `blocks` blocks of one particle each, block `c` reaching `span` blocks
+    /// on, with contact costs `k` and gather costs `g`.
+    fn cut_of(
+        k: &[u64],
+        g: &[u64],
+        span: usize,
+        threads: usize,
+        deferred: u64,
+    ) -> (Vec<usize>, u64) {
+        let n = k.len();
+        let reach: Vec<u32> = (0..n).map(|c| (c + 1 + span).min(n) as u32).collect();
+        let spill_start = vec![0_u32; n + 1];
+        let atomic = |v: &[u64]| v.iter().map(|&x| AtomicU64::new(x)).collect::<Vec<_>>();
+        let (contact, gather) = (atomic(k), atomic(g));
+        let costs = Costs {
+            layout: Layout {
+                n,
+                block: 1,
+                spill_start: &spill_start,
+                reach: &reach,
+            },
+            contact: &contact,
+            gather: &gather,
+        };
+        let mut bound = Vec::new();
+        let zone_gathers = costs.cut(threads, deferred, &mut bound);
+        (bound, zone_gathers)
+    }
+
+    #[test]
+    fn the_zone_gathers_are_left_out_of_the_balance() {
+        // 40 blocks of cost 10 + 10; run 1's zone is its first 2 blocks. Runs of equal
+        // total cost would be cut at 20; without the zone gathers (20 in all, shared at
+        // the end) run 1's own work is 21 · 20 − 20 = 400 against run 0's 19 · 20 = 380.
+        let (k, g) = (vec![10; 40], vec![10; 40]);
+        let (bound, zone_gathers) = cut_of(&k, &g, 2, 2, 0);
+        assert_eq!((bound, zone_gathers), (vec![0, 20, 40], 20));
+        let (bound, zone_gathers) = cut_of(&k, &g, 2, 2, 20);
+        assert_eq!((bound, zone_gathers), (vec![0, 19, 40], 20));
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn the_runs_cover_every_block_in_order_and_balance_their_own_work(
+            costs in proptest::collection::vec((1_u64..1000, 0_u64..200), 1..80),
+            span in 0_usize..6,
+            threads in 1_usize..6,
+        ) {
+            let (k, g): (Vec<u64>, Vec<u64>) = costs.into_iter().unzip();
+            let blocks = k.len();
+            let threads = threads.min(blocks);
+            let (first, deferred) = cut_of(&k, &g, span, threads, 0);
+            let (bound, zone_gathers) = cut_of(&k, &g, span, threads, deferred);
+            for b in [&first, &bound] {
+                proptest::prop_assert_eq!(b.len(), threads + 1);
+                proptest::prop_assert_eq!((b[0], b[threads]), (0, blocks));
+                proptest::prop_assert!(b.windows(2).all(|w| w[0] < w[1]), "{:?}", b);
+            }
+            // The zone of run t: its blocks that an earlier run's block reaches.
+            let mut own = vec![0_u64; threads];
+            let mut in_zones = 0;
+            for t in 0..threads {
+                let reached = (0..bound[t]).map(|c| c + 1 + span).max().unwrap_or(0);
+                for c in bound[t]..bound[t + 1] {
+                    own[t] += k[c];
+                    if c < reached {
+                        in_zones += g[c];
+                    } else {
+                        own[t] += g[c];
+                    }
+                }
+            }
+            proptest::prop_assert_eq!(zone_gathers, in_zones);
+            // Each cut falls within one block's cost of where the own work (less the
+            // deferred zone gathers) is shared equally.
+            let heaviest = (0..blocks).map(|c| k[c] + g[c]).max().unwrap_or(0);
+            let target = (own.iter().sum::<u64>() + in_zones - deferred) / threads as u64;
+            for t in 0..threads - 1 {
+                let at = own[..=t].iter().sum::<u64>();
+                let want = target * (t as u64 + 1);
+                proptest::prop_assert!(
+                    at + heaviest >= want && at <= want + heaviest || bound[t + 1] == t + 1
+                        || bound[t + 1] == blocks - (threads - t - 1),
+                    "{:?} {:?}", bound, own
+                );
             }
         }
     }
