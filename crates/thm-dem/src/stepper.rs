@@ -3,8 +3,8 @@
 //! 1. neighbours: how far the particles moved since the last search (two bounds, one pass);
 //!    cell-grid search and merge of the contact histories when a particle (or wall) moved
 //!    more than half the skin; the per-particle contact index when the lists changed;
-//! 2. contact forces, block by block of particles (blocks of 512 consecutive indices,
-//!    fixed by the index, never by the thread count), in parallel over contiguous runs of
+//! 2. contact forces, block by block of particles (blocks of 256 or 512 consecutive
+//!    indices, by the particle count, never by the thread count), in parallel over contiguous runs of
 //!    blocks (see `blocks.rs`): a block owns the contacts whose first particle it holds (a
 //!    range of the sorted list) and its particles' wall contacts; each contact writes only
 //!    its own history, report and "carried force" flag; the block sums the forces and
@@ -120,12 +120,14 @@ pub struct Stepper<L: ContactLaw> {
     /// Contacts with `pair[0] == i` are `a_start[i]..a_start[i+1]` (the list is sorted).
     a_start: Vec<u32>,
     /// Contacts with `pair[1] == i` whose first particle lies in an earlier block (see
-    /// [`BLOCK`]) are `b_entry[b_start[i]..b_start[i+1]]`, ascending: the gather reads their
+    /// `block`) are `b_entry[b_start[i]..b_start[i+1]]`, ascending: the gather reads their
     /// spill entries.
     b_start: Vec<u32>,
     b_entry: Vec<u32>,
     /// Wall contacts of particle `i` are `wall_start[i]..wall_start[i+1]` (sorted list).
     wall_start: Vec<u32>,
+    /// Particles per block, set with the index (see [`block_len`]).
+    block: usize,
     /// Per block of particles: one past the last particle its contacts reach (at least the
     /// block's end): what its contact pass reads.
     block_reach: Vec<u32>,
@@ -187,10 +189,31 @@ struct Drift {
 /// What an inactive contact adds in the gather.
 const NO_LOAD: SpillEntry = SpillEntry([Vec3::ZERO; 2]);
 
-/// Particles per block of the contact pass and of the per-particle passes: blocks are fixed
-/// by the index, not by the thread count (the order of every sum, and so every bit, depends
-/// on this constant only), and each is a plain loop over sub-slices.
-const BLOCK: usize = 512;
+/// Particles per block of the contact pass and the gather: the largest of these that makes
+/// at least [`BLOCKS_WANTED`] blocks, else the smallest (see [`block_len`]). Blocks are fixed
+/// by the particle count, not by the thread count (the order of every sum, and so every
+/// bit, depends on the block length only), and each is a plain loop over sub-slices.
+const BLOCK_LENS: [usize; 2] = [256, 512];
+
+/// Blocks wanted per state: the runs of the threads are cut at block boundaries, so on two
+/// threads a block is about 1/16 of a run (the 10⁴-sphere bed: 256 particles, about 20 µs
+/// of one thread's work). Longer blocks cost a little less per particle (about 1 % on one
+/// thread on that bed, 3 % on the 10⁵ bed).
+const BLOCKS_WANTED: usize = 32;
+
+/// The block length for `n` particles (see [`BLOCK_LENS`]).
+fn block_len(n: usize) -> usize {
+    BLOCK_LENS
+        .iter()
+        .rev()
+        .copied()
+        .find(|&len| n / len >= BLOCKS_WANTED)
+        .unwrap_or(BLOCK_LENS[0])
+}
+
+/// Particles per block of the drift measurement (a maximum: any partition gives the same
+/// bits).
+const DRIFT_BLOCK: usize = 512;
 
 /// Contacts per chunk of the contact pass's two sweeps (list the contacts that are not quiet,
 /// then evaluate them): at most 256 (the list holds `u8` offsets). Only the speed depends
@@ -211,6 +234,7 @@ impl<L: ContactLaw> Stepper<L> {
             b_start: Vec::new(),
             b_entry: Vec::new(),
             wall_start: Vec::new(),
+            block: BLOCK_LENS[0],
             block_reach: Vec::new(),
             cursor: Vec::new(),
             index_key: None,
@@ -378,9 +402,11 @@ impl<L: ContactLaw> Stepper<L> {
         }
         start_of_first(n, &state.contacts.pair, &mut self.a_start);
         start_of_first(n, &state.wall_contacts.pair, &mut self.wall_start);
+        let block = block_len(n);
+        self.block = block;
         self.block_reach.clear();
-        self.block_reach.extend((0..n.div_ceil(BLOCK)).map(|c| {
-            let (s, e) = (c * BLOCK, ((c + 1) * BLOCK).min(n));
+        self.block_reach.extend((0..n.div_ceil(block)).map(|c| {
+            let (s, e) = (c * block, ((c + 1) * block).min(n));
             let own = &state.contacts.pair[self.a_start[s] as usize..self.a_start[e] as usize];
             own.iter().map(|p| p[1] + 1).fold(e as u32, u32::max)
         }));
@@ -389,7 +415,7 @@ impl<L: ContactLaw> Stepper<L> {
         start.resize(n + 1, 0);
         // Only the contacts whose two particles lie in different blocks: the block of A
         // sums the others itself.
-        let foreign = |p: &[u32; 2]| p[0] as usize / BLOCK != p[1] as usize / BLOCK;
+        let foreign = |p: &[u32; 2]| p[0] as usize / block != p[1] as usize / block;
         for p in state.contacts.pair.iter().filter(|p| foreign(p)) {
             start[p[1] as usize + 1] += 1;
         }
@@ -421,7 +447,7 @@ impl<L: ContactLaw> Stepper<L> {
 
     /// Stages 2 and 3 in one parallel region (see [`contacts_then_gathers`]): the forces of
     /// all particle–particle and particle–wall contacts, block by block of particles (the
-    /// blocks are fixed by the index, see [`BLOCK`]), and the gather and integration of each
+    /// blocks are fixed by the index, see [`block_len`]), and the gather and integration of each
     /// block once the contacts of its own and of every earlier block are done.
     ///
     /// A block's contact pass owns the contacts whose first particle it holds (a range of
@@ -479,6 +505,7 @@ impl<L: ContactLaw> Stepper<L> {
             planar: kinematics.is_planar(),
             sparse: self.sparse,
             n,
+            block: self.block,
             b_start: &self.b_start,
             b_entry: &self.b_entry,
             radius,
@@ -497,6 +524,7 @@ impl<L: ContactLaw> Stepper<L> {
         };
         let starts = BlockStarts {
             n,
+            block: self.block,
             a_start: &self.a_start,
             wall_start: &self.wall_start,
         };
@@ -513,7 +541,7 @@ impl<L: ContactLaw> Stepper<L> {
         // A block's spill entries are those of its contacts (one per contact).
         let layout = Layout {
             n,
-            block: BLOCK,
+            block: self.block,
             spill_start: &self.a_start,
             reach: &self.block_reach,
         };
@@ -592,6 +620,7 @@ impl<L: ContactLaw> Stepper<L> {
 #[derive(Clone, Copy)]
 struct BlockStarts<'a> {
     n: usize,
+    block: usize,
     a_start: &'a [u32],
     wall_start: &'a [u32],
 }
@@ -600,7 +629,7 @@ impl BlockStarts<'_> {
     /// The first particle, contact and wall contact of block `c` (`c` may be one past the
     /// last block).
     fn of(&self, c: usize) -> (usize, usize, usize) {
-        let s = (c * BLOCK).min(self.n);
+        let s = (c * self.block).min(self.n);
         (s, self.a_start[s] as usize, self.wall_start[s] as usize)
     }
 }
@@ -674,6 +703,8 @@ struct BlockPass<'a, L> {
     /// Whether the gather reads spill entries only for stamped particles (see `touched`).
     sparse: bool,
     n: usize,
+    /// Particles per block (see [`block_len`]).
+    block: usize,
     b_start: &'a [u32],
     b_entry: &'a [u32],
     radius: &'a [f64],
@@ -697,7 +728,7 @@ struct BlockPass<'a, L> {
 impl<L: ContactLaw> BlockPass<'_, L> {
     /// Particles `s..e` of block `c`.
     fn particles(&self, c: usize) -> Range<usize> {
-        (c * BLOCK).min(self.n)..((c + 1) * BLOCK).min(self.n)
+        (c * self.block).min(self.n)..((c + 1) * self.block).min(self.n)
     }
 
     /// The contact pass of block `c`: particles `s..e`, their contacts as first particle,
@@ -999,8 +1030,8 @@ fn measure_drift(state: &DemState) -> Drift {
     }
     // Per block: max |Δx|², max ΔR, max −ΔR.
     let block = |c: usize| -> [f64; 3] {
-        let s = c * BLOCK;
-        let e = (s + BLOCK).min(n);
+        let s = c * DRIFT_BLOCK;
+        let e = (s + DRIFT_BLOCK).min(n);
         let mut m = [0.0_f64; 3];
         for ((x, x0), (r, r0)) in p.position[s..e]
             .iter()
@@ -1017,7 +1048,7 @@ fn measure_drift(state: &DemState) -> Drift {
         m
     };
     let max3 = |a: [f64; 3], b: [f64; 3]| [a[0].max(b[0]), a[1].max(b[1]), a[2].max(b[2])];
-    let blocks = n.div_ceil(BLOCK);
+    let blocks = n.div_ceil(DRIFT_BLOCK);
     let m = if n >= PAR_THRESHOLD {
         (0..blocks)
             .into_par_iter()
