@@ -278,6 +278,15 @@ fn run_lattice(threads: usize, kin: Kinematics) -> DemState {
     } else {
         (12, 12, 12)
     };
+    run_lattice_of(threads, kin, [nx, ny, nz], 300)
+}
+
+fn run_lattice_of(
+    threads: usize,
+    kin: Kinematics,
+    [nx, ny, nz]: [usize; 3],
+    steps: u64,
+) -> DemState {
     let p = jittered_lattice(kin, nx, ny, nz, 7, 0.5);
     let mut state = DemState::new(
         p,
@@ -301,7 +310,7 @@ fn run_lattice(threads: usize, kin: Kinematics) -> DemState {
         .num_threads(threads)
         .build()
         .unwrap();
-    pool.install(|| stepper.run(&mut state, 300)).unwrap();
+    pool.install(|| stepper.run(&mut state, steps)).unwrap();
     state
 }
 
@@ -328,6 +337,23 @@ fn one_and_two_threads_give_identical_bits() {
             "the test should exercise breakage"
         );
         assert_eq!(state_bits(&a), state_bits(&b));
+        assert_eq!(a, b);
+    }
+}
+
+/// From 16 384 particles on the stepper's blocks hold 512 particles instead of 256: the same
+/// bits on 1, 2 and 3 threads there too.
+#[test]
+fn one_two_and_three_threads_give_identical_bits_with_long_blocks() {
+    let a = run_lattice_of(1, Kinematics::Spheres3d, [26, 26, 26], 30);
+    assert!(a.particles.len() >= 16_384 && a.contacts.len() > 40_000);
+    assert!(
+        !a.bond_breaks.is_empty(),
+        "the test should exercise breakage"
+    );
+    for threads in [2, 3] {
+        let b = run_lattice_of(threads, Kinematics::Spheres3d, [26, 26, 26], 30);
+        assert_eq!(state_bits(&a), state_bits(&b), "{threads} threads");
         assert_eq!(a, b);
     }
 }
