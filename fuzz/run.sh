@@ -2,7 +2,7 @@
 # Runs each fuzz target in turn for SECONDS seconds (default 600), at the lowest CPU priority,
 # starting from the committed corpus (fuzz/corpus/<target>, read only) and growing a working
 # corpus in fuzz/corpus-work/<target> (not committed). Crashes land in fuzz/artifacts/<target>;
-# copy each, once fixed, to fuzz/regressions/<target>/ so `cargo test -p thm-cli --test
+# copy each, once fixed, to fuzz/regressions/<target>/ so `cargo test -p thm-scenarios --test
 # fuzz_corpus` keeps it fixed. Needs the nightly toolchain and `cargo install cargo-fuzz`.
 #
 #   fuzz/run.sh [SECONDS] [TARGET...]

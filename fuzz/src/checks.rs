@@ -2,7 +2,7 @@
 //! with a short message or a valid result, never a panic.
 //!
 //! Plain functions over bytes, so that the nightly fuzz targets (`fuzz/fuzz_targets/`) and the
-//! stable replay of the committed corpus (`crates/thm-cli/tests/fuzz_corpus.rs`, which includes
+//! stable replay of the committed corpus (`crates/thm-scenarios/tests/fuzz_corpus.rs`, which includes
 //! this file) run the same checks.
 
 use std::path::Path;
@@ -28,13 +28,13 @@ fn short(message: &str) {
 /// Scenario TOML → validated parameters: `thm run`'s reading, the common sections and the
 /// kind's `init` (everything checked before a run writes anything).
 pub fn scenario(data: &[u8]) {
-    use thm_cli::run::config::{DocError, parse_document};
+    use thm_scenarios::registry::{DocError, parse_document};
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
     match parse_document(text) {
         Ok(doc) => {
-            if let Err(e) = thm_cli::run::kinds::validate(&doc) {
+            if let Err(e) = thm_scenarios::registry::validate(&doc) {
                 short(&e.to_string());
                 assert!(!e.key.is_empty());
             }
@@ -154,7 +154,7 @@ pub fn checkpoint(data: &[u8]) {
 /// `thm eos` CSV: the first byte picks the table and model, the rest is standard input. Rows
 /// or an error naming line, row and column; every computed value is a finite number.
 pub fn eos_csv(data: &[u8]) {
-    use thm_cli::eos::{Table, process_csv};
+    use thm_scenarios::eos_csv::{Table, process_csv};
     let Some((&pick, input)) = data.split_first() else {
         return;
     };

@@ -1,6 +1,6 @@
 //! The Rust side of the Python-overhead benchmark (`benchmarks/python/step_overhead.py`): opens
 //! a scenario with the driver `thm run` and the Python module share
-//! (`thm_cli::run::kinds::open`), steps it in rounds and prints the seconds per step of each
+//! (`thm_scenarios::registry::open`), steps it in rounds and prints the seconds per step of each
 //! round, one per line, so that the script can take medians beside the Python runs.
 //!
 //! `cargo run --release -p thm-benchmarks --bin run_steps -- SCENARIO.toml OUT_DIR STEPS ROUNDS`
@@ -9,8 +9,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use thm_cli::run::config::read_document;
-use thm_cli::run::kinds;
+use thm_scenarios::registry::{self, read_document};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -22,7 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for k in 0..rounds {
         let doc = read_document(&file)?;
         let dir = PathBuf::from(out).join(format!("round_{k}"));
-        let mut run = kinds::open(doc, &file, &dir, None)?;
+        let mut run = registry::open(doc, &file, &dir, None)?;
         let n = steps.min(run.n_steps());
         let t = Instant::now();
         for _ in 0..n {

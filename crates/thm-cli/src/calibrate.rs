@@ -14,7 +14,7 @@ use serde::Deserialize;
 use thm_dem::calibration::{StrengthCalibration, calibrate_bond_strength};
 use thm_vpn_flow::permeability::{PermeabilityCalibration, calibrate_t2t_factor};
 
-use crate::run::units::{Pressure, Quantity};
+use thm_scenarios::units::{Pressure, Quantity};
 
 /// Which calibration to run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -1,12 +1,9 @@
 //! # thm-cli
 //!
-//! The `thm` command-line tool's subcommands as a library, so that tests and fuzz targets
-//! drive exactly what the binary runs: [`eos`] (equation of state over CSV), [`run`] (scenario
-//! files: reading, validation, the driver, checkpoints and resume) and [`calibrate`].
-//!
-//! Every input (a scenario file, a packing CSV, an EOS CSV row, a checkpoint) gives a typed
-//! error naming the key, line or field and the allowed range, never a panic; messages quote at
-//! most a short excerpt of the input.
+//! The `thm` command: argument parsing, MPI start-up and exit codes over
+//! [`thm_scenarios`], which holds everything a run does. The subcommands live here as a
+//! library so that tests drive exactly what the binary runs: [`eos`] (equation of state over
+//! CSV), [`run`] (scenario files) and [`calibrate`].
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 

@@ -1,33 +1,18 @@
-//! `thm run FILE.toml [--out DIR] [--resume CHECKPOINT]`: runs a scenario file.
+//! `thm run FILE.toml [--out DIR] [--resume CHECKPOINT]`: runs a scenario file with
+//! [`thm_scenarios::run_file_on`] and turns how it ended into a message and an exit code.
 //!
-//! The file names its `kind`; the common sections are `[time]` (step, end) and `[output]`
-//! (history_every, frame_every, checkpoint_every, encoding); every other section belongs to the
-//! kind. Quantities are numbers in SI units or strings `"value unit"`. Unknown keys, missing
-//! keys, wrong types or units and out-of-range values are errors naming the key path.
-//!
-//! The output folder receives `scenario.toml` (the resolved scenario), `history.csv`, one
-//! `.pvd` + folder of `.vtu` frames per series, `checkpoints/step_*.ckpt`, the kind's profiles
-//! (`profiles/*.csv`, see [`profiles`]) and `summary.md` with history and profile plots. A fresh run refuses a folder that already holds a run. Ctrl-C stops after the
-//! current step with a checkpoint; `--resume` continues bit for bit from any checkpoint.
-
-pub mod arrays;
-pub mod config;
-pub mod error;
-pub mod kinds;
-pub mod pictures;
-pub mod profiles;
-pub mod rve_frames;
-pub mod scenario;
-pub mod summary;
-pub mod units;
+//! Built with the feature `mpi`, it starts MPI; under `mpirun -np N` (N > 1) the material
+//! points' RVEs are spread over the N processes, process 0 writes every output and reports how
+//! the run ended. Ctrl-C stops after the current step with a checkpoint.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use error::RunError;
-use scenario::{DriveOptions, Outcome, Progress};
+use thm_scenarios::error::RunError;
+use thm_scenarios::scenario::{Outcome, Progress};
+use thm_scenarios::{default_out, last_complete_checkpoint, run_file_on};
 
 /// Arguments of `thm run`.
 #[derive(Debug, clap::Args)]
@@ -42,57 +27,7 @@ pub struct RunArgs {
     pub resume: Option<PathBuf>,
 }
 
-/// The default output folder of a scenario file.
-pub fn default_out(file: &Path) -> PathBuf {
-    let stem = file
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "run".into());
-    PathBuf::from("runs").join(stem)
-}
-
-/// Runs a scenario file (the library entry, used by the command and by tests).
-pub fn run_file(
-    file: &Path,
-    out: &Path,
-    resume: Option<&Path>,
-    interrupt: &AtomicBool,
-    progress: Progress,
-) -> Result<Outcome, RunError> {
-    run_file_on(file, out, resume, interrupt, progress, None)
-}
-
-/// [`run_file`] on the processes of a distributed run (every process calls it; see
-/// [`scenario::Run::open_on`]).
-pub fn run_file_on(
-    file: &Path,
-    out: &Path,
-    resume: Option<&Path>,
-    interrupt: &AtomicBool,
-    progress: Progress,
-    processes: Option<Arc<dyn thm_coupling::multiscale::Collective>>,
-) -> Result<Outcome, RunError> {
-    let doc = config::read_document(file);
-    // A file that one process cannot read must stop every process.
-    if let Some(c) = &processes
-        && let Some(process) = c.first_failed(doc.is_err())
-        && doc.is_ok()
-    {
-        return Err(RunError::OtherProcess { process });
-    }
-    let opts = DriveOptions {
-        out: out.to_path_buf(),
-        resume: resume.map(Path::to_path_buf),
-        interrupt,
-        progress,
-        processes,
-    };
-    kinds::dispatch(doc?, file, &opts)
-}
-
-/// `thm run`. Built with the feature `mpi`, it starts MPI; under `mpirun -np N` (N > 1) the
-/// material points' RVEs are spread over the N processes, process 0 writes every output and
-/// reports how the run ended.
+/// `thm run`.
 pub fn run(args: &RunArgs) -> ExitCode {
     #[cfg(feature = "mpi")]
     let mpi = crate::mpi_rve::init();
@@ -190,20 +125,3 @@ fn report(args: &RunArgs, out: &Path, result: Result<Outcome, RunError>) -> Exit
         }
     }
 }
-
-/// The newest checkpoint in `out` that is complete and intact (checked, not only listed).
-pub fn last_complete_checkpoint(out: &Path) -> Option<PathBuf> {
-    let mut found: Vec<PathBuf> = std::fs::read_dir(out.join("checkpoints"))
-        .ok()?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "ckpt"))
-        .collect();
-    found.sort();
-    found
-        .into_iter()
-        .rev()
-        .find(|p| thm_io::checkpoint_info(p).is_ok())
-}
-
-#[cfg(test)]
-mod tests;

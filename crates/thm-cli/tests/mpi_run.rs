@@ -225,7 +225,7 @@ fn an_output_folder_only_process_zero_refuses_ends_every_process() {
 /// The newest complete checkpoint of `out` continues (without MPI) to the bits of the run
 /// of `file` never stopped, 6 steps further.
 fn newest_checkpoint_continues(dir: &Path, file: &Path, out: &Path) {
-    let newest = thm_cli::run::last_complete_checkpoint(out).expect("a complete checkpoint");
+    let newest = thm_scenarios::last_complete_checkpoint(out).expect("a complete checkpoint");
     let step: u64 = newest
         .file_stem()
         .unwrap()

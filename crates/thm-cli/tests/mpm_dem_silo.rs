@@ -237,12 +237,12 @@ fn run_on_threads(size: usize, file: &Path, out: &Path, resume: Option<&Path>) {
             let resume = resume.map(Path::to_path_buf);
             std::thread::spawn(move || {
                 let c: Arc<dyn Collective> = Arc::new(h);
-                thm_cli::run::run_file_on(
+                thm_scenarios::run_file_on(
                     &file,
                     &out,
                     resume.as_deref(),
                     &AtomicBool::new(false),
-                    thm_cli::run::scenario::Progress::Quiet,
+                    thm_scenarios::scenario::Progress::Quiet,
                     Some(c),
                 )
             })

@@ -8,7 +8,7 @@
 //! What it does:
 //! - **Runs.** A scenario from a TOML file or a Python dict (converted to TOML and read by the
 //!   same code as `thm run`, so an error names the same key path) is opened as a
-//!   [`thm_cli::run::kinds::DynRun`] and stepped one step at a time on the file's output
+//!   [`thm_scenarios::registry::DynRun`] and stepped one step at a time on the file's output
 //!   schedule; the files written (history, frames, checkpoints, summary) are those of
 //!   `thm run`, bit for bit, and a checkpoint written from Python resumes under `thm run` and
 //!   the other way round.
@@ -37,11 +37,11 @@ use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::exceptions::{PyKeyboardInterrupt, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
-use thm_cli::run::config::{DocError, ScenarioDocument, parse_document, read_document};
-use thm_cli::run::error::RunError;
-use thm_cli::run::kinds::{self, DynRun};
-use thm_cli::run::scenario::Outcome;
 use thm_eos::{Branch, EosError, EquationOfState, Iapws97Water, Model, PengRobinson, PoreClosure};
+use thm_scenarios::config::ScenarioDocument;
+use thm_scenarios::error::RunError;
+use thm_scenarios::registry::{self, DocError, DynRun, parse_document, read_document};
+use thm_scenarios::scenario::Outcome;
 
 /// The module's exceptions (Python names `thm.ScenarioError`, `thm.RunError`,
 /// `thm.EosError`).
@@ -186,7 +186,7 @@ fn read_scenario(source: &Bound<'_, PyAny>) -> PyResult<(ScenarioDocument, PathB
                 py,
                 &RunError::Config {
                     path: file.clone(),
-                    error: thm_cli::run::error::ConfigError::new(key, message),
+                    error: thm_scenarios::error::ConfigError::new(key, message),
                 },
             )
         })?;
@@ -230,13 +230,13 @@ fn read_scenario(source: &Bound<'_, PyAny>) -> PyResult<(ScenarioDocument, PathB
 fn validate(source: &Bound<'_, PyAny>) -> PyResult<()> {
     let py = source.py();
     let (doc, file) = read_scenario(source)?;
-    kinds::validate(&doc).map_err(|error| run_error(py, &RunError::Config { path: file, error }))
+    registry::validate(&doc).map_err(|error| run_error(py, &RunError::Config { path: file, error }))
 }
 
 /// The scenario kinds, as `kind` tags.
 #[pyfunction]
 fn kinds_list() -> Vec<String> {
-    kinds::names()
+    registry::names()
         .split(", ")
         .map(|k| k.trim_matches('`').to_string())
         .collect()
@@ -388,10 +388,10 @@ impl PyRun {
                     "out: a scenario given as a dict needs an output folder (out=...)",
                 ));
             }
-            None => thm_cli::run::default_out(&file),
+            None => thm_scenarios::default_out(&file),
         };
         let run = py
-            .detach(|| kinds::open(doc, &file, &out, resume.as_deref()))
+            .detach(|| registry::open(doc, &file, &out, resume.as_deref()))
             .map_err(|e| run_error(py, &e))?;
         Ok(Self {
             kind: run.kind(),

@@ -18,12 +18,12 @@ use thm_coupling::pore_scale::{
 use thm_coupling::verification::{WaterAir, water_air};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 
-use crate::run::config::TimeControl;
-use crate::run::error::{ConfigError, RunError};
-use crate::run::profiles::Profile;
-use crate::run::scenario::{FrameSink, Scenario};
-use crate::run::summary::SummaryRow;
-use crate::run::units::{Length, Pressure, Quantity, Time};
+use crate::config::TimeControl;
+use crate::error::{ConfigError, RunError};
+use crate::profiles::Profile;
+use crate::scenario::{FrameSink, Scenario};
+use crate::summary::SummaryRow;
+use crate::units::{Length, Pressure, Quantity, Time};
 
 /// Which case of the paper.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -331,12 +331,12 @@ impl Scenario for PoreScaleBar {
     type Params = Params;
     type State = BarRun;
 
-    fn arrays<'s>(&'s self, run: &'s BarRun) -> Vec<crate::run::scenario::StateArray<'s>> {
-        use crate::run::scenario::StateArray;
+    fn arrays<'s>(&'s self, run: &'s BarRun) -> Vec<crate::arrays::StateArray<'s>> {
+        use crate::arrays::StateArray;
         let c = &run.coupled;
         // The spheres' forces are set by the coupling every step (pore pressure), so none of
         // this kind's arrays is writable.
-        let mut arrays = crate::run::arrays::sphere_arrays(&c.dem.particles);
+        let mut arrays = crate::arrays::sphere_arrays(&c.dem.particles);
         for a in &mut arrays {
             a.writable = false;
         }

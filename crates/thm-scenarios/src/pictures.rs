@@ -1,13 +1,13 @@
 //! Pictures of the state at every frame (`pictures/NAME_STEP.png`), drawn by the kind
-//! ([`super::scenario::Scenario::pictures`]) and shown in `summary.md`.
+//! ([`crate::scenario::Scenario::pictures`]) and shown in `summary.md`.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
 use thm_io::Picture;
 
-use super::error::RunError;
-use super::profiles::{io_error, step_files};
+use crate::error::RunError;
+use crate::profiles::{io_error, step_files, thin};
 
 /// Folder of the pictures in the output folder.
 pub const PICTURE_DIR: &str = "pictures";
@@ -45,7 +45,7 @@ pub fn embed_pictures(out: &Path, last_step: u64, md: &mut String) {
     );
     for (name, files) in &by_name {
         let _ = writeln!(md, "### {}\n", name.replace('_', " "));
-        for (step, path) in super::summary::thin(files, SHOWN) {
+        for (step, path) in thin(files, SHOWN) {
             if let Some(file) = path.file_name().and_then(|f| f.to_str()) {
                 let _ = write!(md, "![{name} at step {step}]({PICTURE_DIR}/{file}) ");
             }

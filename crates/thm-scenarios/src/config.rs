@@ -1,13 +1,11 @@
 //! Reading a scenario file: TOML → the common sections and a kind's own parameters, with every
 //! error naming its dotted key path.
 
-use std::path::Path;
-
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
-use super::error::{ConfigError, RunError};
-use super::units::{Quantity, Time};
+use crate::error::ConfigError;
+use crate::units::{Quantity, Time};
 
 /// `[time]`: the time step and the simulated duration.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -205,134 +203,33 @@ pub fn from_toml<T: DeserializeOwned>(value: toml::Value, prefix: &str) -> Resul
     })
 }
 
-fn take(table: &mut toml::Table, key: &str) -> Option<toml::Value> {
-    table.remove(key)
-}
-
-/// Reads and parses a scenario file into its common sections and the kind's part.
-pub fn read_document(path: &Path) -> Result<ScenarioDocument, RunError> {
-    let bytes = std::fs::read(path).map_err(|source| RunError::ReadScenario {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    if bytes.starts_with(thm_io::checkpoint::BINARY_MAGIC)
-        || bytes.starts_with(b"{\"format\":\"thm-checkpoint\"")
-    {
-        return Err(RunError::CheckpointGivenAsScenario {
-            path: path.to_path_buf(),
-        });
+/// `v` finite and in `[lo, hi]`, else an error at `key` naming the range.
+pub fn check_range(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), ConfigError> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(())
+    } else {
+        Err(ConfigError::new(
+            key,
+            format!("must be in [{lo}, {hi}], got {v}"),
+        ))
     }
-    let text = std::str::from_utf8(&bytes).map_err(|e| RunError::Syntax {
-        path: path.to_path_buf(),
-        message: format!(
-            "not UTF-8 text (invalid byte at offset {}, after `{}`)",
-            e.valid_up_to(),
-            thm_io::checkpoint::excerpt(
-                &bytes[e.valid_up_to().saturating_sub(24)..e.valid_up_to()]
-            )
-        ),
-    })?;
-    parse_document(text).map_err(|e| match e {
-        DocError::Syntax(message) => RunError::Syntax {
-            path: path.to_path_buf(),
-            message,
-        },
-        DocError::Config(error) => RunError::Config {
-            path: path.to_path_buf(),
-            error,
-        },
-    })
 }
 
-/// The parser's message with its line and column and a short excerpt of the line around the
-/// column (the parser's own rendering quotes the whole line, which can be the whole file).
-fn syntax_message(text: &str, e: &toml::de::Error) -> String {
-    let message = super::error::shorten(e.message().trim());
-    let Some(span) = e.span() else {
-        return message;
-    };
-    let at = (0..=span.start.min(text.len()))
-        .rev()
-        .find(|&i| text.is_char_boundary(i))
-        .unwrap_or(0);
-    let line_start = text[..at].rfind('\n').map_or(0, |i| i + 1);
-    let line_no = text[..at].matches('\n').count() + 1;
-    let column = text[line_start..at].chars().count() + 1;
-    let line = text[line_start..].split('\n').next().unwrap_or("");
-    let before: String = {
-        let head: Vec<char> = text[line_start..at].chars().collect();
-        head[head.len().saturating_sub(20)..].iter().collect()
-    };
-    let after: String = line[at - line_start..].chars().take(28).collect();
-    let cut_before = before.chars().count() < column - 1;
-    let cut_after = after.chars().count() < line[at - line_start..].chars().count();
-    format!(
-        "line {line_no}, column {column}: {message} (at `{}{before}{after}{}`)",
-        if cut_before { "…" } else { "" },
-        if cut_after { "…" } else { "" },
-    )
+/// `v` in `[lo, hi]`, else an error at `key` naming the range.
+pub fn check_count(key: &str, v: usize, lo: usize, hi: usize) -> Result<(), ConfigError> {
+    if (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(ConfigError::new(
+            key,
+            format!("must be in [{lo}, {hi}], got {v}"),
+        ))
+    }
 }
 
-/// Why a document does not parse.
-#[derive(Debug)]
-pub enum DocError {
-    /// Not TOML.
-    Syntax(String),
-    /// A value is wrong.
-    Config(ConfigError),
-}
-
-/// Parses scenario text (see [`read_document`]).
-pub fn parse_document(text: &str) -> Result<ScenarioDocument, DocError> {
-    let mut table: toml::Table = text
-        .parse()
-        .map_err(|e: toml::de::Error| DocError::Syntax(syntax_message(text, &e)))?;
-    let cfg = DocError::Config;
-    let kind: String = match take(&mut table, "kind") {
-        Some(v) => from_toml(v, "kind").map_err(cfg)?,
-        None => {
-            return Err(cfg(ConfigError::new(
-                "kind",
-                format!("missing key; one of {}", super::kinds::names()),
-            )));
-        }
-    };
-    let common = |table: &mut toml::Table| -> Result<_, ConfigError> {
-        let title: Option<String> = take(table, "title")
-            .map(|v| from_toml(v, "title"))
-            .transpose()?;
-        let time: TimeSection = match take(table, "time") {
-            Some(v) => from_toml(v, "time")?,
-            None => return Err(ConfigError::new("time", "missing section [time]")),
-        };
-        let output: OutputSection = take(table, "output")
-            .map(|v| from_toml(v, "output"))
-            .transpose()?
-            .unwrap_or_default();
-        Ok((title, time, output))
-    };
-    let (title, time, output) = common(&mut table).map_err(|e| {
-        // The sections only mean something for a known kind: an unknown one is named first.
-        // (A kind unknown here but complete is still refused by the dispatch.)
-        if super::kinds::is_known(&kind) {
-            cfg(e)
-        } else {
-            cfg(ConfigError::new(
-                "kind",
-                format!(
-                    "unknown scenario kind `{kind}`; one of {}",
-                    super::kinds::names()
-                ),
-            ))
-        }
-    })?;
-    Ok(ScenarioDocument {
-        common: Common {
-            kind,
-            title,
-            time,
-            output,
-        },
-        rest: table,
-    })
-}
+/// File names inside the output folder.
+pub const SCENARIO_FILE: &str = "scenario.toml";
+/// The CSV history.
+pub const HISTORY_FILE: &str = "history.csv";
+/// The summary.
+pub const SUMMARY_FILE: &str = "summary.md";

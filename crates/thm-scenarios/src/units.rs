@@ -9,7 +9,7 @@ use std::marker::PhantomData;
 use serde::de::{self, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use super::error::ConfigError;
+use crate::error::ConfigError;
 
 /// A physical dimension: its name and the units accepted for it.
 pub trait Dimension {

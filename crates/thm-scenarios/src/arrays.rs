@@ -1,5 +1,5 @@
 //! The state arrays the kinds share, for front ends that read and write a run's state between
-//! steps (see [`super::scenario::Scenario::arrays`]): material points of `thm-mpm`, spheres of
+//! steps (see [`crate::scenario::Scenario::arrays`]): material points of `thm-mpm`, spheres of
 //! `thm-dem`, pores and cells of the pore-scale model.
 //!
 //! Names say what a row is (`point_`, `sphere_`, `pore_`, `cell_`) and what it holds; units
@@ -11,8 +11,7 @@ use std::borrow::Cow;
 use thm_dem::{ParticleState, Vec3};
 use thm_mpm::MaterialPoints;
 
-use super::error::RunError;
-use super::scenario::{StateArray, check_input};
+use crate::error::RunError;
 
 /// Highest temperature accepted from outside \[K\].
 pub const MAX_TEMPERATURE: f64 = 1.0e5;
@@ -213,9 +212,117 @@ pub fn set_points_array(
     if set_point_array(points, &POINTS, name, values)? {
         Ok(())
     } else {
-        Err(super::scenario::not_writable(
+        Err(not_writable(name, &writable_points(&POINTS)))
+    }
+}
+
+/// A named array of a run's state, for front ends (the Python module): `rows × columns`
+/// values, row-major, in the unit named.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StateArray<'a> {
+    /// Name, e.g. `sphere_temperature` (file-name safe, unique within a kind).
+    pub name: &'static str,
+    /// Unit of the values, e.g. `K`.
+    pub unit: &'static str,
+    /// Values per row (1 for scalars, 2 or 3 for vectors, 3 for `[xx, yy, xy]` tensors).
+    pub columns: usize,
+    /// The values, borrowed from the state where its layout is already a flat `f64` array.
+    pub values: std::borrow::Cow<'a, [f64]>,
+    /// Whether [`Scenario::set_array`] accepts new values for it between steps.
+    pub writable: bool,
+}
+
+impl<'a> StateArray<'a> {
+    /// A read-only scalar per row, borrowed.
+    pub fn scalar(name: &'static str, unit: &'static str, values: &'a [f64]) -> Self {
+        Self {
             name,
-            &writable_points(&POINTS),
-        ))
+            unit,
+            columns: 1,
+            values: std::borrow::Cow::Borrowed(values),
+            writable: false,
+        }
+    }
+
+    /// A read-only row of `N` values per item, borrowed.
+    pub fn rows<const N: usize>(
+        name: &'static str,
+        unit: &'static str,
+        values: &'a [[f64; N]],
+    ) -> Self {
+        Self {
+            name,
+            unit,
+            columns: N,
+            values: std::borrow::Cow::Borrowed(values.as_flattened()),
+            writable: false,
+        }
+    }
+
+    /// The same array, marked writable.
+    pub fn writable(mut self) -> Self {
+        self.writable = true;
+        self
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.values.len() / self.columns.max(1)
+    }
+
+    /// Whether the array has no rows.
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+}
+
+/// Checks new values for a writable array: the length of the current array, and every value
+/// finite and in `[lo, hi]`, or in `(0, hi]` when `lo` is 0 and `above_zero` (temperatures).
+/// Errors name the array, the value's index and the allowed range.
+pub fn check_input(
+    name: &str,
+    values: &[f64],
+    expected_len: usize,
+    (lo, hi): (f64, f64),
+    above_zero: bool,
+    unit: &str,
+) -> Result<(), RunError> {
+    let bad = |detail: String| RunError::Input {
+        array: name.to_string(),
+        detail,
+    };
+    if values.len() != expected_len {
+        return Err(bad(format!(
+            "needs {expected_len} values, got {}",
+            values.len()
+        )));
+    }
+    let ok = |v: f64| v.is_finite() && v >= lo && v <= hi && !(above_zero && v <= 0.0);
+    if let Some(i) = values.iter().position(|v| !ok(*v)) {
+        let open = if above_zero { "(" } else { "[" };
+        return Err(bad(format!(
+            "value {i} must be finite and in {open}{lo}, {hi}] {unit}, got {}",
+            values[i]
+        )));
+    }
+    Ok(())
+}
+
+/// The error for an array name a kind does not accept.
+pub fn not_writable(name: &str, writable: &[&str]) -> RunError {
+    RunError::Input {
+        array: name.to_string(),
+        detail: if writable.is_empty() {
+            "this kind has no writable arrays".into()
+        } else {
+            format!(
+                "not a writable array of this kind; writable: {}",
+                writable
+                    .iter()
+                    .map(|w| format!("`{w}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        },
     }
 }

@@ -182,3 +182,12 @@ pub enum RunError {
         steps: u64,
     },
 }
+
+/// The error of a physics that refused a step (or a synchronisation) at `step`, `time`.
+pub fn physics_error<E: std::fmt::Display>(step: u64, time: f64) -> impl FnOnce(E) -> RunError {
+    move |e| RunError::Physics {
+        step,
+        time,
+        message: e.to_string(),
+    }
+}

@@ -5,9 +5,10 @@ use std::path::Path;
 
 use thm_verify::{Plot, Series, SeriesRole};
 
-use super::config::Common;
-use super::error::RunError;
-use super::scenario::{HISTORY_FILE, SCENARIO_FILE, SUMMARY_FILE, Scenario};
+use crate::config::Common;
+use crate::config::{HISTORY_FILE, SCENARIO_FILE, SUMMARY_FILE};
+use crate::error::RunError;
+use crate::profiles::{read_history, thin};
 
 /// A figure of merit: measured at the end of the run, with its reference when one is known.
 #[derive(Debug, Clone, PartialEq)]
@@ -58,42 +59,6 @@ pub struct RunInfo<'a> {
     )>,
 }
 
-/// Reads a CSV written by the driver (a history or a profile): header cells and rows.
-pub(crate) fn read_history(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), RunError> {
-    let text = std::fs::read_to_string(path).map_err(|e| thm_io::IoError::File {
-        path: path.to_path_buf(),
-        action: "read",
-        source: e,
-    })?;
-    let mut lines = text.lines();
-    let header: Vec<String> = lines
-        .next()
-        .unwrap_or("")
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    let rows = lines
-        .map(|l| {
-            l.split(',')
-                .map(|c| c.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
-    Ok((header, rows))
-}
-
-/// Every `k`-th element so that at most `max` remain (always keeping the last).
-pub(crate) fn thin<T: Clone>(v: &[T], max: usize) -> Vec<T> {
-    let k = v.len().div_ceil(max.max(1)).max(1);
-    let mut out: Vec<T> = v.iter().step_by(k).cloned().collect();
-    if let Some(last) = v.last()
-        && !(v.len() - 1).is_multiple_of(k)
-    {
-        out.push(last.clone());
-    }
-    out
-}
-
 fn file_stem(s: &str) -> String {
     s.chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
@@ -112,13 +77,14 @@ pub(crate) fn fmt(x: f64) -> String {
     }
 }
 
-/// Writes `summary.md` and one PNG per monitored quantity (measured history against its
-/// reference, when the scenario knows one).
-pub fn write_summary<S: Scenario>(
+/// Writes `summary.md` with the figures of merit `summary` (the scenario's, at the end time
+/// `info.steps_done × info.dt`) and one PNG per monitored quantity: the measured history
+/// against `reference(column, time)`, the monitored quantity's reference where one is known.
+pub fn write_summary(
     out: &Path,
     info: &RunInfo<'_>,
-    scenario: &S,
-    state: &S::State,
+    summary: &[SummaryRow],
+    reference: &dyn Fn(usize, f64) -> Option<f64>,
 ) -> Result<(), RunError> {
     let (header, rows) = read_history(&out.join(HISTORY_FILE))?;
     let time: Vec<f64> = rows.iter().map(|r| r[0]).collect();
@@ -183,12 +149,11 @@ pub fn write_summary<S: Scenario>(
         "- histories: [`{HISTORY_FILE}`]({HISTORY_FILE}); ParaView series: the `.pvd` files\n"
     );
 
-    let summary = scenario.summary(state, t_end);
     if !summary.is_empty() {
         let _ = writeln!(md, "## Figures at t = {} s\n", fmt(t_end));
         let _ = writeln!(md, "| quantity | unit | measured | reference | error |");
         let _ = writeln!(md, "|---|---|---|---|---|");
-        for r in &summary {
+        for r in summary {
             let (reference, err) = match r.reference {
                 Some(x) if x != 0.0 => {
                     (fmt(x), format!("{:.3e} rel", ((r.measured - x) / x).abs()))
@@ -220,7 +185,7 @@ pub fn write_summary<S: Scenario>(
         let ref_times = thin(&time, 1000);
         let reference: Vec<(f64, f64)> = ref_times
             .iter()
-            .filter_map(|&t| scenario.reference(k - 1, t).map(|y| (t, y)))
+            .filter_map(|&t| reference(k - 1, t).map(|y| (t, y)))
             .collect();
         if !reference.is_empty() {
             series.insert(
@@ -244,8 +209,8 @@ pub fn write_summary<S: Scenario>(
         thm_io::write_plot_png(&plot, &out.join(&png))?;
         let _ = writeln!(md, "![{name}]({png})\n");
     }
-    super::profiles::plot_profiles(out, info.steps_done, &mut md)?;
-    super::pictures::embed_pictures(out, info.steps_done, &mut md);
+    crate::profiles::plot_profiles(out, info.steps_done, &mut md)?;
+    crate::pictures::embed_pictures(out, info.steps_done, &mut md);
     thm_io::fsutil::write_atomically(&out.join(SUMMARY_FILE), |w| {
         std::io::Write::write_all(w, md.as_bytes())
     })?;

@@ -9,7 +9,7 @@ use thm_dem::BondState;
 use thm_io::{FieldValues, IoError, UnstructuredGrid};
 use thm_rve::RveState;
 
-use super::scenario::FrameSink;
+use crate::scenario::FrameSink;
 
 /// Scratch for writing RVE frames (reused between frames).
 #[derive(Debug, Default)]

@@ -17,11 +17,11 @@ use thm_coupling::multiscale::{GranularRod, RodModel, RveMaterial, RvePoint};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 use thm_mpm::{BatchConstitutive, Mpm, MpmState};
 
-use crate::run::config::TimeControl;
-use crate::run::error::{ConfigError, RunError};
-use crate::run::scenario::{FrameSink, Scenario};
-use crate::run::summary::SummaryRow;
-use crate::run::units::{Length, Quantity};
+use crate::config::TimeControl;
+use crate::error::{ConfigError, RunError};
+use crate::scenario::{FrameSink, Scenario};
+use crate::summary::SummaryRow;
+use crate::units::{Length, Quantity};
 
 /// `[rod]`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -92,11 +92,11 @@ impl Scenario for MpmDemRod {
 
     fn synchronise(&mut self, state: &mut Self::State) -> Result<(), RunError> {
         let (step, time) = (state.step, state.time);
-        super::synchronise_points(&self.material, &mut state.material, step, time)
+        super::multiscale::synchronise_points(&self.material, &mut state.material, step, time)
     }
 
-    fn arrays<'s>(&'s self, state: &'s Self::State) -> Vec<crate::run::scenario::StateArray<'s>> {
-        crate::run::arrays::mpm_rve_arrays(&state.points, &state.material)
+    fn arrays<'s>(&'s self, state: &'s Self::State) -> Vec<crate::arrays::StateArray<'s>> {
+        crate::arrays::mpm_rve_arrays(&state.points, &state.material)
     }
 
     fn set_array(
@@ -105,7 +105,7 @@ impl Scenario for MpmDemRod {
         name: &str,
         values: &[f64],
     ) -> Result<(), RunError> {
-        crate::run::arrays::set_points_array(&mut state.points, name, values)
+        crate::arrays::set_points_array(&mut state.points, name, values)
     }
 
     fn init(p: &Params, time: &TimeControl) -> Result<(Self, Self::State), ConfigError> {

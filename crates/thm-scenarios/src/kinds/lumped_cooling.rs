@@ -18,13 +18,11 @@
 use serde::{Deserialize, Serialize};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 
-use crate::run::config::TimeControl;
-use crate::run::error::{ConfigError, RunError};
-use crate::run::scenario::{FrameSink, Scenario};
-use crate::run::summary::SummaryRow;
-use crate::run::units::{
-    Density, HeatTransferCoefficient, Length, Quantity, SpecificHeat, Temperature,
-};
+use crate::config::TimeControl;
+use crate::error::{ConfigError, RunError};
+use crate::scenario::{FrameSink, Scenario};
+use crate::summary::SummaryRow;
+use crate::units::{Density, HeatTransferCoefficient, Length, Quantity, SpecificHeat, Temperature};
 
 /// `[particles]`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -126,8 +124,8 @@ impl Scenario for LumpedCooling {
     type Params = Params;
     type State = State;
 
-    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::run::scenario::StateArray<'s>> {
-        use crate::run::scenario::StateArray;
+    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::arrays::StateArray<'s>> {
+        use crate::arrays::StateArray;
         vec![
             StateArray::rows("sphere_position", "m", &self.position),
             StateArray::scalar("sphere_radius", "m", &self.radius),
@@ -137,16 +135,13 @@ impl Scenario for LumpedCooling {
 
     fn set_array(&mut self, state: &mut State, name: &str, values: &[f64]) -> Result<(), RunError> {
         if name != "sphere_temperature" {
-            return Err(crate::run::scenario::not_writable(
-                name,
-                &["sphere_temperature"],
-            ));
+            return Err(crate::arrays::not_writable(name, &["sphere_temperature"]));
         }
-        crate::run::scenario::check_input(
+        crate::arrays::check_input(
             name,
             values,
             state.temperature.len(),
-            (0.0, crate::run::arrays::MAX_TEMPERATURE),
+            (0.0, crate::arrays::MAX_TEMPERATURE),
             true,
             "K",
         )?;

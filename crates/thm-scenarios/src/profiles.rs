@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use thm_io::IoError;
 use thm_verify::{Plot, Series, SeriesRole};
 
-use super::error::RunError;
+use crate::error::RunError;
 
 /// The folder of the profile files inside the output folder.
 pub const PROFILE_DIR: &str = "profiles";
@@ -91,7 +91,7 @@ struct ProfileFile {
 }
 
 fn read_profile(path: &Path) -> Result<ProfileFile, RunError> {
-    let (header, rows) = super::summary::read_history(path)?;
+    let (header, rows) = read_history(path)?;
     let columns: Vec<Vec<f64>> = (0..header.len())
         .map(|k| {
             rows.iter()
@@ -168,7 +168,7 @@ pub fn plot_profiles(out: &Path, last_step: u64, md: &mut String) -> Result<(), 
         "## Profiles\n\nEvery frame's profiles are in [`{PROFILE_DIR}/`]({PROFILE_DIR}/) as CSV.\n"
     );
     for (name, files) in &by_name {
-        let chosen = super::summary::thin(files, 5);
+        let chosen = thin(files, 5);
         let mut read = Vec::with_capacity(chosen.len());
         for (_, path) in &chosen {
             read.push(read_profile(path)?);
@@ -234,4 +234,40 @@ pub fn plot_profiles(out: &Path, last_step: u64, md: &mut String) -> Result<(), 
         }
     }
     Ok(())
+}
+
+/// Reads a CSV written by the driver (a history or a profile): header cells and rows.
+pub(crate) fn read_history(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), RunError> {
+    let text = std::fs::read_to_string(path).map_err(|e| thm_io::IoError::File {
+        path: path.to_path_buf(),
+        action: "read",
+        source: e,
+    })?;
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    let rows = lines
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    Ok((header, rows))
+}
+
+/// Every `k`-th element so that at most `max` remain (always keeping the last).
+pub(crate) fn thin<T: Clone>(v: &[T], max: usize) -> Vec<T> {
+    let k = v.len().div_ceil(max.max(1)).max(1);
+    let mut out: Vec<T> = v.iter().step_by(k).cloned().collect();
+    if let Some(last) = v.last()
+        && !(v.len() - 1).is_multiple_of(k)
+    {
+        out.push(last.clone());
+    }
+    out
 }

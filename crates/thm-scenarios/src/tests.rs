@@ -3,9 +3,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
-use super::error::RunError;
-use super::run_file;
-use super::scenario::{Outcome, Progress, checkpoint_path};
+use crate::error::RunError;
+use crate::run_file;
+use crate::scenario::{Outcome, Progress, checkpoint_path};
 
 const SCENARIO: &str = r#"
 kind = "lumped_cooling"
@@ -357,10 +357,11 @@ fn the_shipped_scenario_runs_and_matches_its_exact_solution() {
 /// non-finite monitored value, name it with its step, and keep the last good checkpoint.
 mod unstable {
     use super::*;
-    use crate::run::config::{TimeControl, parse_document};
-    use crate::run::error::ConfigError;
-    use crate::run::scenario::{DriveOptions, FrameSink, Scenario, drive};
-    use crate::run::summary::SummaryRow;
+    use crate::config::TimeControl;
+    use crate::error::ConfigError;
+    use crate::registry::parse_document;
+    use crate::scenario::{DriveOptions, FrameSink, Scenario, drive};
+    use crate::summary::SummaryRow;
     use serde::{Deserialize, Serialize};
     use thm_io::{Column, IoError};
 
@@ -526,7 +527,7 @@ probe = "1 m"
 /// driver, bit-for-bit resume, and bad fields.
 mod dem_bar {
     use super::*;
-    use crate::run::kinds::dem_uniaxial_tension_bar::State;
+    use crate::kinds::dem_uniaxial_tension_bar::State;
     use serde::Deserialize;
 
     const BAR: &str = r#"
@@ -1150,13 +1151,13 @@ track = [[0.25, 0.5]]
 /// range without touching the state.
 #[test]
 fn written_state_arrays_follow_the_physics_and_are_checkpointed() {
-    use super::config::parse_document;
-    use super::kinds;
+    use crate::registry;
+    use crate::registry::parse_document;
 
     let dir = scratch("arrays");
     let file = write_scenario(&dir, SCENARIO);
     let open = |resume: Option<&Path>| {
-        kinds::open(
+        registry::open(
             parse_document(SCENARIO).unwrap(),
             &file,
             &dir.join("out"),

@@ -24,10 +24,10 @@ use thm_coupling::multiscale::{RveMaterial, RvePoint};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 use thm_mpm::{BatchConstitutive, LinearThermoElastic, Mpm, MpmState};
 
-use crate::run::config::TimeControl;
-use crate::run::error::{ConfigError, RunError};
-use crate::run::scenario::{FrameSink, Scenario};
-use crate::run::summary::SummaryRow;
+use crate::config::TimeControl;
+use crate::error::{ConfigError, RunError};
+use crate::scenario::{FrameSink, Scenario};
+use crate::summary::SummaryRow;
 
 /// `[square]`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -117,17 +117,22 @@ impl Scenario for MpmDemSquare {
 
     fn synchronise(&mut self, state: &mut Self::State) -> Result<(), RunError> {
         let (step, time) = (state.multiscale.step, state.multiscale.time);
-        super::synchronise_points(&self.material, &mut state.multiscale.material, step, time)
+        super::multiscale::synchronise_points(
+            &self.material,
+            &mut state.multiscale.material,
+            step,
+            time,
+        )
     }
 
-    fn arrays<'s>(&'s self, state: &'s SquareState) -> Vec<crate::run::scenario::StateArray<'s>> {
+    fn arrays<'s>(&'s self, state: &'s SquareState) -> Vec<crate::arrays::StateArray<'s>> {
         let mut arrays =
-            crate::run::arrays::point_arrays(&state.multiscale.points, &crate::run::arrays::POINTS);
-        arrays.extend(crate::run::arrays::point_arrays(
+            crate::arrays::point_arrays(&state.multiscale.points, &crate::arrays::POINTS);
+        arrays.extend(crate::arrays::point_arrays(
             &state.twin.points,
-            &crate::run::arrays::TWIN_POINTS,
+            &crate::arrays::TWIN_POINTS,
         ));
-        arrays.extend(crate::run::arrays::rve_arrays(&state.multiscale.material));
+        arrays.extend(crate::arrays::rve_arrays(&state.multiscale.material));
         arrays
     }
 
@@ -137,23 +142,23 @@ impl Scenario for MpmDemSquare {
         name: &str,
         values: &[f64],
     ) -> Result<(), RunError> {
-        use crate::run::arrays::{POINTS, set_point_array, writable_points};
+        use crate::arrays::{POINTS, set_point_array, writable_points};
         if set_point_array(&mut state.multiscale.points, &POINTS, name, values)? {
             return Ok(());
         }
         if set_point_array(
             &mut state.twin.points,
-            &crate::run::arrays::TWIN_POINTS,
+            &crate::arrays::TWIN_POINTS,
             name,
             values,
         )? {
             return Ok(());
         }
-        Err(crate::run::scenario::not_writable(
+        Err(crate::arrays::not_writable(
             name,
             &[
                 writable_points(&POINTS),
-                writable_points(&crate::run::arrays::TWIN_POINTS),
+                writable_points(&crate::arrays::TWIN_POINTS),
             ]
             .concat(),
         ))

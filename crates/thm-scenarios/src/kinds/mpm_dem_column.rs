@@ -21,13 +21,13 @@ use thm_coupling::multiscale::distributed::SharedDistribution;
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 use thm_mpm::MpmState;
 
-use super::{check_count, check_range};
-use crate::run::config::TimeControl;
-use crate::run::error::{ConfigError, RunError};
-use crate::run::profiles::Profile;
-use crate::run::scenario::{FrameSink, Scenario};
-use crate::run::summary::SummaryRow;
-use crate::run::units::{Quantity, Temperature, Time};
+use crate::config::TimeControl;
+use crate::config::{check_count, check_range};
+use crate::error::{ConfigError, RunError};
+use crate::profiles::Profile;
+use crate::scenario::{FrameSink, Scenario};
+use crate::summary::SummaryRow;
+use crate::units::{Quantity, Temperature, Time};
 
 /// `[column]`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -100,7 +100,7 @@ pub struct MpmDemColumn {
     rise: Vec<f64>,
     pressure: Vec<f64>,
     bonds: Vec<f64>,
-    rve_fields: crate::run::rve_frames::PointRveFields,
+    rve_fields: crate::rve_frames::PointRveFields,
 }
 
 impl MpmDemColumn {
@@ -134,15 +134,15 @@ impl Scenario for MpmDemColumn {
     fn synchronise(&mut self, state: &mut State) -> Result<(), RunError> {
         let (step, time) = (state.mpm.step, state.mpm.time);
         self.with_state(state, |m| m.synchronise())
-            .map_err(super::physics_error(step, time))
+            .map_err(crate::error::physics_error(step, time))
     }
 
-    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::run::scenario::StateArray<'s>> {
-        crate::run::arrays::mpm_rve_arrays(&state.mpm.points, &state.mpm.material)
+    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::arrays::StateArray<'s>> {
+        crate::arrays::mpm_rve_arrays(&state.mpm.points, &state.mpm.material)
     }
 
     fn set_array(&mut self, state: &mut State, name: &str, values: &[f64]) -> Result<(), RunError> {
-        crate::run::arrays::set_points_array(&mut state.mpm.points, name, values)
+        crate::arrays::set_points_array(&mut state.mpm.points, name, values)
     }
 
     fn init(p: &Params, time: &TimeControl) -> Result<(Self, State), ConfigError> {

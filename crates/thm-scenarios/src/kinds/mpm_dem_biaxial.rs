@@ -20,14 +20,14 @@ use thm_coupling::multiscale::{RvePoint, biaxial::BiaxialRecord};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 use thm_mpm::{BatchConstitutive, MpmState};
 
-use super::check_range;
-use crate::run::config::TimeControl;
-use crate::run::error::{ConfigError, RunError};
-use crate::run::profiles::Profile;
-use crate::run::rve_frames::RveFrames;
-use crate::run::scenario::{FrameSink, Scenario};
-use crate::run::summary::SummaryRow;
-use crate::run::units::{Pressure, Quantity, Temperature, Velocity};
+use crate::config::TimeControl;
+use crate::config::check_range;
+use crate::error::{ConfigError, RunError};
+use crate::profiles::Profile;
+use crate::rve_frames::RveFrames;
+use crate::scenario::{FrameSink, Scenario};
+use crate::summary::SummaryRow;
+use crate::units::{Pressure, Quantity, Temperature, Velocity};
 
 /// `[biaxial]`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -113,7 +113,7 @@ pub struct MpmDemBiaxial {
     /// Bonds installed in all RVEs after the consolidation.
     bonds_installed: usize,
     rve_frames: RveFrames,
-    rve_fields: crate::run::rve_frames::PointRveFields,
+    rve_fields: crate::rve_frames::PointRveFields,
 }
 
 impl MpmDemBiaxial {
@@ -153,15 +153,15 @@ impl Scenario for MpmDemBiaxial {
     fn synchronise(&mut self, state: &mut State) -> Result<(), RunError> {
         let (step, time) = (state.mpm.step, state.mpm.time);
         self.with_state(state, |m| m.synchronise())
-            .map_err(super::physics_error(step, time))
+            .map_err(crate::error::physics_error(step, time))
     }
 
-    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::run::scenario::StateArray<'s>> {
-        crate::run::arrays::mpm_rve_arrays(&state.mpm.points, &state.mpm.material)
+    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::arrays::StateArray<'s>> {
+        crate::arrays::mpm_rve_arrays(&state.mpm.points, &state.mpm.material)
     }
 
     fn set_array(&mut self, state: &mut State, name: &str, values: &[f64]) -> Result<(), RunError> {
-        crate::run::arrays::set_points_array(&mut state.mpm.points, name, values)
+        crate::arrays::set_points_array(&mut state.mpm.points, name, values)
     }
 
     fn init(p: &Params, time: &TimeControl) -> Result<(Self, State), ConfigError> {

@@ -12,10 +12,13 @@ use serde::{Deserialize, Serialize};
 use thm_coupling::multiscale::{Collective, Distribution, SharedDistribution};
 use thm_io::{Column, CsvHistory, IoError, UnstructuredGrid, VtuSeries};
 
-use super::config::{ScenarioDocument, TimeControl, from_toml};
-use super::error::{ConfigError, RunError};
-use super::profiles::{Profile, write_profiles};
-use super::summary::{RunInfo, SummaryRow, write_summary};
+use crate::arrays::{StateArray, not_writable};
+use crate::config::{
+    Common, HISTORY_FILE, SCENARIO_FILE, ScenarioDocument, TimeControl, from_toml,
+};
+use crate::error::{ConfigError, RunError};
+use crate::profiles::{Profile, write_profiles};
+use crate::summary::{RunInfo, SummaryRow, write_summary};
 
 /// Receives the grids of one frame: `(series name, grid)`.
 pub type FrameSink<'a> = dyn FnMut(&str, &UnstructuredGrid<'_>) -> Result<(), IoError> + 'a;
@@ -68,13 +71,13 @@ pub trait Scenario: Sized {
     fn summary(&self, state: &Self::State, time: f64) -> Vec<SummaryRow>;
 
     /// Quantities along lines through the state at `time`, written at every frame and drawn
-    /// in the summary (see [`super::profiles`]). Default: none.
+    /// in the summary (see [`crate::profiles`]). Default: none.
     fn profiles(&self, _state: &Self::State, _time: f64) -> Vec<Profile> {
         Vec::new()
     }
 
     /// Pictures of the state at `time`, `(name, picture)`, written at every frame as
-    /// `pictures/NAME_STEP.png` and shown in the summary (see [`super::pictures`]). Names
+    /// `pictures/NAME_STEP.png` and shown in the summary (see [`crate::pictures`]). Names
     /// are file-name safe. Default: none.
     fn pictures(&self, _state: &Self::State, _time: f64) -> Vec<(String, thm_io::Picture)> {
         Vec::new()
@@ -173,13 +176,6 @@ pub enum Outcome {
     },
 }
 
-/// File names inside the output folder.
-pub const SCENARIO_FILE: &str = "scenario.toml";
-/// The CSV history.
-pub const HISTORY_FILE: &str = "history.csv";
-/// The summary.
-pub const SUMMARY_FILE: &str = "summary.md";
-
 /// The checkpoint file of `step`.
 pub fn checkpoint_path(out: &Path, step: u64) -> PathBuf {
     out.join("checkpoints")
@@ -258,7 +254,7 @@ fn params_difference(saved: &str, now: &str) -> String {
         (Some(a), Some(b)) => walk("", &a, &b),
         _ => None,
     };
-    super::error::shorten(&found.unwrap_or_else(|| "the parameters differ".into()))
+    crate::error::shorten(&found.unwrap_or_else(|| "the parameters differ".into()))
 }
 
 /// Reads and validates the kind's parameters and the common sections and builds the stepper
@@ -274,120 +270,9 @@ fn build<S: Scenario>(
 }
 
 /// Checks a parsed document for kind `S` as a run does before writing anything (see
-/// [`super::kinds::validate`]).
+/// [`crate::kinds::validate`]).
 pub fn validate<S: Scenario>(doc: &ScenarioDocument) -> Result<(), ConfigError> {
     build::<S>(doc).map(|_| ())
-}
-
-/// A named array of a run's state, for front ends (the Python module): `rows × columns`
-/// values, row-major, in the unit named.
-#[derive(Debug, Clone, PartialEq)]
-pub struct StateArray<'a> {
-    /// Name, e.g. `sphere_temperature` (file-name safe, unique within a kind).
-    pub name: &'static str,
-    /// Unit of the values, e.g. `K`.
-    pub unit: &'static str,
-    /// Values per row (1 for scalars, 2 or 3 for vectors, 3 for `[xx, yy, xy]` tensors).
-    pub columns: usize,
-    /// The values, borrowed from the state where its layout is already a flat `f64` array.
-    pub values: std::borrow::Cow<'a, [f64]>,
-    /// Whether [`Scenario::set_array`] accepts new values for it between steps.
-    pub writable: bool,
-}
-
-impl<'a> StateArray<'a> {
-    /// A read-only scalar per row, borrowed.
-    pub fn scalar(name: &'static str, unit: &'static str, values: &'a [f64]) -> Self {
-        Self {
-            name,
-            unit,
-            columns: 1,
-            values: std::borrow::Cow::Borrowed(values),
-            writable: false,
-        }
-    }
-
-    /// A read-only row of `N` values per item, borrowed.
-    pub fn rows<const N: usize>(
-        name: &'static str,
-        unit: &'static str,
-        values: &'a [[f64; N]],
-    ) -> Self {
-        Self {
-            name,
-            unit,
-            columns: N,
-            values: std::borrow::Cow::Borrowed(values.as_flattened()),
-            writable: false,
-        }
-    }
-
-    /// The same array, marked writable.
-    pub fn writable(mut self) -> Self {
-        self.writable = true;
-        self
-    }
-
-    /// Number of rows.
-    pub fn len(&self) -> usize {
-        self.values.len() / self.columns.max(1)
-    }
-
-    /// Whether the array has no rows.
-    pub fn is_empty(&self) -> bool {
-        self.values.is_empty()
-    }
-}
-
-/// Checks new values for a writable array: the length of the current array, and every value
-/// finite and in `[lo, hi]`, or in `(0, hi]` when `lo` is 0 and `above_zero` (temperatures).
-/// Errors name the array, the value's index and the allowed range.
-pub fn check_input(
-    name: &str,
-    values: &[f64],
-    expected_len: usize,
-    (lo, hi): (f64, f64),
-    above_zero: bool,
-    unit: &str,
-) -> Result<(), RunError> {
-    let bad = |detail: String| RunError::Input {
-        array: name.to_string(),
-        detail,
-    };
-    if values.len() != expected_len {
-        return Err(bad(format!(
-            "needs {expected_len} values, got {}",
-            values.len()
-        )));
-    }
-    let ok = |v: f64| v.is_finite() && v >= lo && v <= hi && !(above_zero && v <= 0.0);
-    if let Some(i) = values.iter().position(|v| !ok(*v)) {
-        let open = if above_zero { "(" } else { "[" };
-        return Err(bad(format!(
-            "value {i} must be finite and in {open}{lo}, {hi}] {unit}, got {}",
-            values[i]
-        )));
-    }
-    Ok(())
-}
-
-/// The error for an array name a kind does not accept.
-pub fn not_writable(name: &str, writable: &[&str]) -> RunError {
-    RunError::Input {
-        array: name.to_string(),
-        detail: if writable.is_empty() {
-            "this kind has no writable arrays".into()
-        } else {
-            format!(
-                "not a writable array of this kind; writable: {}",
-                writable
-                    .iter()
-                    .map(|w| format!("`{w}`"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )
-        },
-    }
 }
 
 /// A run of scenario kind `S` that is stepped from outside: opened (validated, output folder
@@ -395,7 +280,7 @@ pub fn not_writable(name: &str, writable: &[&str]) -> RunError {
 /// checkpointed on request and finished with its summary. `thm run` ([`drive`]) and the Python
 /// module step the same object, so both write the same files bit for bit.
 pub struct Run<S: Scenario> {
-    common: super::config::Common,
+    common: Common,
     file: PathBuf,
     out: PathBuf,
     params_text: String,
@@ -669,7 +554,7 @@ impl<S: Scenario> Run<S> {
             },
         )?;
         write_profiles(out, step, t, &self.scenario.profiles(&self.state, t))?;
-        super::pictures::write_pictures(out, step, &self.scenario.pictures(&self.state, t))
+        crate::pictures::write_pictures(out, step, &self.scenario.pictures(&self.state, t))
     }
 
     fn save(&mut self) -> Result<PathBuf, RunError> {
@@ -806,7 +691,12 @@ impl<S: Scenario> Run<S> {
             interrupted,
             processes,
         };
-        write_summary(&self.out, &info, &self.scenario, &self.state)
+        let summary = self
+            .scenario
+            .summary(&self.state, self.step as f64 * self.dt);
+        write_summary(&self.out, &info, &summary, &|column, time| {
+            self.scenario.reference(column, time)
+        })
     }
 }
 

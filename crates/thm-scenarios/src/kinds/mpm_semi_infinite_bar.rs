@@ -13,11 +13,11 @@ use serde::{Deserialize, Serialize};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 use thm_mpm::{LinearThermoElastic, Mpm, MpmState};
 
-use crate::run::config::TimeControl;
-use crate::run::error::{ConfigError, RunError};
-use crate::run::scenario::{FrameSink, Scenario};
-use crate::run::summary::SummaryRow;
-use crate::run::units::{Length, Quantity};
+use crate::config::TimeControl;
+use crate::error::{ConfigError, RunError};
+use crate::scenario::{FrameSink, Scenario};
+use crate::summary::SummaryRow;
+use crate::units::{Length, Quantity};
 
 /// Length of the bar of B-Sect. 5.1.1 \[m\].
 const BAR_LENGTH: f64 = 6.0;
@@ -77,8 +77,8 @@ impl Scenario for SemiInfiniteBar {
     type Params = Params;
     type State = MpmState<()>;
 
-    fn arrays<'s>(&'s self, state: &'s Self::State) -> Vec<crate::run::scenario::StateArray<'s>> {
-        crate::run::arrays::point_arrays(&state.points, &crate::run::arrays::POINTS)
+    fn arrays<'s>(&'s self, state: &'s Self::State) -> Vec<crate::arrays::StateArray<'s>> {
+        crate::arrays::point_arrays(&state.points, &crate::arrays::POINTS)
     }
 
     fn set_array(
@@ -87,7 +87,7 @@ impl Scenario for SemiInfiniteBar {
         name: &str,
         values: &[f64],
     ) -> Result<(), RunError> {
-        crate::run::arrays::set_points_array(&mut state.points, name, values)
+        crate::arrays::set_points_array(&mut state.points, name, values)
     }
 
     fn init(p: &Params, time: &TimeControl) -> Result<(Self, Self::State), ConfigError> {

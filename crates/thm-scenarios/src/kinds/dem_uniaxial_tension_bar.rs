@@ -24,11 +24,11 @@ use thm_dem::verification::{BarLoading, BarTension, Grip, rising_branch_modulus}
 use thm_dem::{BondRadius, BondState, CohesiveFrictionalParams, DemState, critical_time_step};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 
-use crate::run::config::TimeControl;
-use crate::run::error::{ConfigError, RunError};
-use crate::run::scenario::{FrameSink, Scenario};
-use crate::run::summary::SummaryRow;
-use crate::run::units::{Density, Length, Pressure, Quantity, Velocity};
+use crate::config::TimeControl;
+use crate::error::{ConfigError, RunError};
+use crate::scenario::{FrameSink, Scenario};
+use crate::summary::SummaryRow;
+use crate::units::{Density, Length, Pressure, Quantity, Velocity};
 
 /// `[packing]`: exactly one of `seed` and `file`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -297,15 +297,15 @@ impl Scenario for DemTensionBar {
     type Params = Params;
     type State = State;
 
-    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::run::scenario::StateArray<'s>> {
-        crate::run::arrays::sphere_arrays(&state.dem.particles)
+    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::arrays::StateArray<'s>> {
+        crate::arrays::sphere_arrays(&state.dem.particles)
     }
 
     fn set_array(&mut self, state: &mut State, name: &str, values: &[f64]) -> Result<(), RunError> {
-        if crate::run::arrays::set_sphere_force(&mut state.dem.particles, name, values)? {
+        if crate::arrays::set_sphere_force(&mut state.dem.particles, name, values)? {
             return Ok(());
         }
-        Err(crate::run::scenario::not_writable(
+        Err(crate::arrays::not_writable(
             name,
             &["sphere_external_force"],
         ))
