@@ -9,9 +9,9 @@
 //! columns are the sums over its steps from `StepReport::stage_seconds`.
 
 use std::time::Instant;
+use thm_coupling::bar::water_air;
 use thm_coupling::bar::{BarCase, bar_params, bar_state};
 use thm_coupling::pore_scale::{PoreScaleStepper, Skeleton, StageSeconds};
-use thm_coupling::verification::water_air;
 
 struct Timing {
     total: f64,

@@ -12,12 +12,12 @@
 
 use std::time::Instant;
 
+use thm_coupling::bar::water_air;
 use thm_coupling::bar::{
     BarCase, CASE_A_BOND_TENSILE_STRENGTH, CASE_A_DENSITY_SCALE, PAPER_BAR, bar_params_sized,
     bar_state_sized, case_a_coupling_step, scale_sphere_density,
 };
 use thm_coupling::pore_scale::{PoreScaleStepper, StageSeconds};
-use thm_coupling::verification::water_air;
 
 struct Measured {
     spheres: usize,

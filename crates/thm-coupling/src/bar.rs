@@ -33,11 +33,12 @@
 use serde::{Deserialize, Serialize};
 use thm_dem::packing::Packing;
 use thm_dem::{CohesiveFrictionalParams, DemState, Kinematics, StepperParams, Vec3};
+use thm_eos::{Model, PengRobinson, water_air_closure};
 use thm_fvm_heat::{
     BoundaryCondition as HeatBoundary, BoundaryParams, CrossDiffusion, HeatParams,
     TemperatureSchedule,
 };
-use thm_vpn_flow::{BoundaryCondition as FlowCondition, FlowParameters};
+use thm_vpn_flow::{BoundaryCondition as FlowCondition, EosFluid, FlowParameters};
 use thm_vpn_mesh::mesher::overlapping_pairs;
 use thm_vpn_mesh::packing::{PackingSpec, random_packing};
 use thm_vpn_mesh::{BoundarySide, MeshParams, Outline, RemeshCriteriaParams};
@@ -46,6 +47,14 @@ use crate::pore_scale::{
     CouplingError, CouplingStepParams, FlowBoundary, FlowScheme, HeatScheme, InitialFluid,
     PoreScaleConfig, PoreScaleParams, PoreScaleState, PressureForce, Skeleton,
 };
+
+/// Paper A's fluids: Peng–Robinson water with the volume correction and air (A-Eqs. 16–29).
+pub type WaterAir = EosFluid<PengRobinson, PengRobinson>;
+
+/// Paper A's water–air closure (A-Eqs. 16–29, Table 1).
+pub fn water_air() -> WaterAir {
+    EosFluid(water_air_closure(Model::PrCorrected))
+}
 
 /// Width of the bar (x) \[m\].
 pub const BAR_WIDTH: f64 = 0.020;
@@ -284,7 +293,7 @@ pub fn bar_state_sized(
 }
 
 /// Spheres whose surface lies within this distance of a bar end are held in case a \[m\]
-/// (the grip depth of the tension test, `thm_dem::verification::BarLoading::paper_a`).
+/// (the grip depth of the tension test, `thm_dem::tension::BarLoading::paper_a`).
 pub const END_HOLD_DEPTH: f64 = 1e-3;
 
 /// Holds (displacement and rotation) the spheres whose surface lies within
@@ -366,9 +375,9 @@ impl EquivalentMedium {
 
     /// Temperature at height `y` and time `t` of this medium in `case` with the liquid moving
     /// upwards at `mass_flux` (A-Eqs. 60–61 at zero flux, with advection otherwise; see
-    /// `thm_fvm_heat::verification::advection_diffusion_bar_temperature`).
+    /// `thm_fvm_heat::analytical::advection_diffusion_bar_temperature`).
     pub fn temperature(&self, case: BarCase, y: f64, t: f64, mass_flux: f64) -> f64 {
-        thm_fvm_heat::verification::advection_diffusion_bar_temperature(
+        thm_fvm_heat::analytical::advection_diffusion_bar_temperature(
             y,
             t,
             BAR_LENGTH,

@@ -130,7 +130,7 @@
 //! (`mpm_dem_column`); the silo discharge of B-Sect. 5.3.2 (`multiscale::silo`, kind
 //! `mpm_dem_silo`), which at the shipped reduced size stops before the paper's 12 s / 2 s.
 //!
-//! ## Verification ([`verification::cases`])
+//! ## Verification (`verification::cases`, feature `verification`)
 //!
 //! - `coupling/pore_scale_closed_conservation`: liquid mass, gas mass and thermal energy of a
 //!   closed, adiabatic bonded packing constant to 10⁻¹² relative, with a free skeleton
@@ -156,4 +156,5 @@ pub mod bar;
 pub mod multiscale;
 pub mod pore_scale;
 
+#[cfg(feature = "verification")]
 pub mod verification;

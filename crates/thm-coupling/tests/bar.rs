@@ -1,9 +1,9 @@
 //! The bar cases of A-Sects. 4–6 on the A-Fig. 8 packing: set-up, a few coupled steps of
 //! case b, and the stop with a named pore when single-phase water goes into tension.
 
+use thm_coupling::bar::water_air;
 use thm_coupling::bar::{BarCase, bar_packing, bar_params, bar_state, centreline_cells};
 use thm_coupling::pore_scale::{CouplingError, PoreScaleStepper};
-use thm_coupling::verification::water_air;
 
 const CASES: [BarCase; 4] = [
     BarCase::Cooling,

@@ -5,7 +5,7 @@
 //! verification cases themselves run in release builds only.
 
 use thm_coupling::multiscale::column::{ColumnModel, ColumnTest};
-use thm_coupling::multiscale::column_verification::{reduced_column, run_column};
+use thm_coupling::verification::column::{reduced_column, run_column};
 
 /// 2 × 2 cells of 1 m with 2 × 2 points each (16 RVEs of 30 disks), Δt = 10⁻³ s, 50 steps
 /// of settling and `collapse` steps after the release, β_b = 0.1 with melting (bonds,

@@ -642,7 +642,7 @@ fn slab_product_is_b_eq_59() {
         for (x, y) in [(0.5, 0.5), (0.2, 0.7), (0.05, 0.5)] {
             let ours = 100.0 * (1.0 - slab_factor(x, 1.0, 0.1, t) * slab_factor(y, 1.0, 0.1, t));
             let theirs =
-                thm_mpm::reference::heated_square_temperature(x, y, 1.0, 0.1, t, 0.0, 100.0);
+                thm_mpm::analytical::heated_square_temperature(x, y, 1.0, 0.1, t, 0.0, 100.0);
             assert!(
                 (ours - theirs).abs() < 1e-9,
                 "t {t}, ({x}, {y}): {ours} vs {theirs}"

@@ -21,7 +21,7 @@
 
 use crate::contact::CohesiveFrictionalParams;
 use crate::error::{DemError, check_positive, check_range};
-use crate::verification::{TensionResult, TensionTest, uniaxial_tension};
+use crate::tension::{TensionResult, TensionTest, uniaxial_tension};
 use rayon::prelude::*;
 
 /// What to calibrate the bond strengths against, and how.

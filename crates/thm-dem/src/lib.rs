@@ -90,11 +90,16 @@
 //! particles. The A-Sect. 3 bar (20 × 80 mm, 4–8 mm, 10 %)
 //! holds about 49 spheres at 10 % porosity with uniform diameters (`0.9·1600 mm² / E[πd²/4]
 //! = 29.3 mm²`); the "40–45 spheres" of the specimen description correspond to 18–27 %.
-//! [`verification::cases`] holds the two-sphere restitution, the bond threshold and the
-//! uniaxial tension test of A-Sect. 3.1 (see its notes for the comparison with the paper).
-//! [`calibration::calibrate_bond_strength`] finds the bond tensile strength `T` (with `C/T`
-//! fixed) for which the mean strength of the seeded bars equals a target, as A-Sect. 3
-//! calibrates the DEM against the measured 8.8 MPa.
+//!
+//! ## Features
+//!
+//! The default build holds the DEM alone. `calibration` adds the uniaxial tension test of
+//! A-Sect. 3.1 (`tension`) and `calibration::calibrate_bond_strength`, which finds the bond
+//! tensile strength `T` (with `C/T` fixed) for which the mean strength of the seeded bars
+//! equals a target, as A-Sect. 3 calibrates the DEM against the measured 8.8 MPa.
+//! `verification` (with `calibration`) adds `verification::cases`: the two-sphere
+//! restitution, the bond threshold and the tension test of A-Sect. 3.1, collected by `cargo
+//! xtask verify`.
 //!
 //! ## Validity
 //!
@@ -134,6 +139,7 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 mod blocks;
+#[cfg(feature = "calibration")]
 pub mod calibration;
 pub mod contact;
 pub mod error;
@@ -141,9 +147,12 @@ pub mod neighbour;
 pub mod packing;
 pub mod state;
 pub mod stepper;
+#[cfg(feature = "calibration")]
+pub mod tension;
 pub mod validate;
 pub mod vec3;
 pub mod vector;
+#[cfg(feature = "verification")]
 pub mod verification;
 
 pub use contact::{

@@ -2,7 +2,7 @@
 //! two bonds of stiffness `K_n = E_c R` in series break at `T·R²` (A-Eqs. 1, 3, 6).
 
 use thm_dem::packing::Packing;
-use thm_dem::verification::{BarLoading, BarTension, Grip};
+use thm_dem::tension::{BarLoading, BarTension, Grip};
 use thm_dem::*;
 
 fn chain(r: f64) -> Packing {
@@ -191,12 +191,12 @@ fn plates_stop_at_the_end_strain_and_hold() {
 }
 
 /// The post-peak reload of packing 3 with A-Table 1's bond strengths (module docs of
-/// `thm_dem::verification`): after the first drop the stress climbs again, and wherever it
+/// `thm_dem::tension`): after the first drop the stress climbs again, and wherever it
 /// does a path of intact bonds (a ligament the first crack left) still joins the two grips.
 #[test]
 fn the_post_peak_reload_is_carried_by_an_intact_ligament() {
     use thm_dem::packing::{PackingParams, random_packing};
-    use thm_dem::verification::GENERATOR_POROSITY;
+    use thm_dem::tension::GENERATOR_POROSITY;
     let params = PackingParams {
         bond_gap: 4e-3,
         porosity: GENERATOR_POROSITY,

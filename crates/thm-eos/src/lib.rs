@@ -110,6 +110,7 @@ mod closure;
 mod error;
 mod iapws;
 mod peng_robinson;
+#[cfg(feature = "verification")]
 pub mod verification;
 
 pub use closure::{ClosureState, PoreClosure, TwoPhaseClosure};

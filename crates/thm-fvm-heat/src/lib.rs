@@ -142,9 +142,12 @@
 //!     `fvm_heat/cooling_bar`, backward Euler Δt = 1 s, largest centreline error over
 //!     100–400 s: full 0.13 K, ratio 2: 0.32 K, ratio 1: 1.03 K). The default stays full.
 //!
-//! ## Verification
+//! ## Analytical solutions and verification
 //!
-//! [`verification::cases`]: the cooling bar (A-Sect. 4) at 100–400 s against the Fourier
+//! [`analytical`] holds the closed forms of A-Sects. 4–5 that scenarios compare with (the
+//! bar's effective properties, A-Eq. 63; the cooling bar, A-Eqs. 60–61; the bar with a flow
+//! along it; the steady conduction–advection profile). `verification::cases` (feature
+//! `verification`, collected by `cargo xtask verify`): the cooling bar (A-Sect. 4) at 100–400 s against the Fourier
 //! series (paper: 0.52 K) on the mesher's fluid+solid mesh of the paper's bar (about 0.1 K,
 //! backward Euler, Δt = 1 s) and on a structured mesh (about 0.01 K explicit, 0.3 K implicit
 //! with Δt = 5 s), second-order
@@ -153,6 +156,7 @@
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod analytical;
 mod error;
 pub mod geometry;
 mod implicit;
@@ -161,6 +165,7 @@ pub mod properties;
 pub mod spheres;
 mod state;
 pub mod stepper;
+#[cfg(feature = "verification")]
 pub mod verification;
 
 pub use error::HeatError;

@@ -113,23 +113,31 @@
 //! between bodies other than rigid walls, no CPDI, no implicit time integration. The DEM RVE
 //! material lives in `thm-coupling`, behind [`Constitutive`].
 //!
-//! ## Verification ([`verification::cases`])
+//! ## Set-ups, analytical solutions and verification
 //!
-//! The semi-infinite bar (B-Sect. 5.1.1) against B-Eq. 52 and a converged finite-difference
+//! [`setups`] builds the TM-MPM problems of B-Sects. 5.1–5.2 as models ready to step;
+//! [`analytical`] holds the closed forms scenarios compare with (B-Eqs. 52, 59). Behind the
+//! feature `verification`: `reference`, finite-difference solutions of the dynamic
+//! thermo-elastic bar and plate, and `verification::cases` (collected by `cargo xtask
+//! verify`): the semi-infinite bar (B-Sect. 5.1.1) against B-Eq. 52 and a converged finite-difference
 //! solution of the dynamic thermo-elastic bar; the 2D plate (B-Sect. 5.1.2) against the exact
 //! temperature series and a finer MPM run; the heated square (B-Sect. 5.2.2) against B-Eq. 59.
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod analytical;
 pub mod boundary;
 pub mod config;
 pub mod error;
 pub mod grid;
 pub mod material;
 pub mod points;
+#[cfg(feature = "verification")]
 pub mod reference;
+pub mod setups;
 pub mod shape;
 pub mod stepper;
+#[cfg(feature = "verification")]
 pub mod verification;
 
 pub use boundary::{

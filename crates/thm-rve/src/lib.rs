@@ -76,7 +76,8 @@
 //!    `Δσ_xx/Δε_yy = K − G`, `ν = (K − G)/(K + G)`, `E = 2K(1 − ν)` (2D). Recomputed from the
 //!    paper's 12.4 and 2.18 MPa: ν = 0.176, E = 12.02 MPa, as stated. The packing consolidated
 //!    with μ = 0.001 (B-Table 1) gives the paper's order only when compressed with μ = 0.5; a
-//!    nearly frictionless packing has a tiny shear modulus (ν ≈ 0.76). See the verification.
+//!    nearly frictionless packing has a tiny shear modulus (ν ≈ 0.76). See the verification
+//!    (`verification::cases`, feature `verification`, collected by `cargo xtask verify`).
 //! 10. *Energy.* The heat returned equals the sliding work to round-off; the cell's mechanical
 //!     energy balance (boundary work = Δ elastic + Δ kinetic + friction heat) closes only to
 //!     first order in Δt with explicit integration (≈ 4·10⁻⁴ at 0.2 √(m/k_n), tested to
@@ -129,6 +130,7 @@ pub mod packing;
 pub mod params;
 pub mod state;
 pub mod stepper;
+#[cfg(feature = "verification")]
 pub mod verification;
 
 pub use batch::RveBatch;

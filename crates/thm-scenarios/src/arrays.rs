@@ -228,7 +228,7 @@ pub struct StateArray<'a> {
     pub columns: usize,
     /// The values, borrowed from the state where its layout is already a flat `f64` array.
     pub values: std::borrow::Cow<'a, [f64]>,
-    /// Whether [`Scenario::set_array`] accepts new values for it between steps.
+    /// Whether [`crate::scenario::Scenario::set_array`] accepts new values for it between steps.
     pub writable: bool,
 }
 

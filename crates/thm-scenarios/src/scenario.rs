@@ -270,7 +270,7 @@ fn build<S: Scenario>(
 }
 
 /// Checks a parsed document for kind `S` as a run does before writing anything (see
-/// [`crate::kinds::validate`]).
+/// [`crate::registry::validate`]).
 pub fn validate<S: Scenario>(doc: &ScenarioDocument) -> Result<(), ConfigError> {
     build::<S>(doc).map(|_| ())
 }

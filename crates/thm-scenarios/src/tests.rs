@@ -616,12 +616,11 @@ end_strain = 0.0005
         };
         let state = final_state(&out, steps);
         // Same packing, law, plates and time step through the crate's own driver.
-        let reference =
-            thm_dem::verification::uniaxial_tension(&thm_dem::verification::TensionTest {
-                seed: 1,
-                ..Default::default()
-            })
-            .unwrap();
+        let reference = thm_dem::tension::uniaxial_tension(&thm_dem::tension::TensionTest {
+            seed: 1,
+            ..Default::default()
+        })
+        .unwrap();
         assert_eq!(state.peak_stress, reference.strength);
         assert_eq!(state.strain_at_peak, reference.strain_at_peak);
         assert_eq!(state.coordination_initial, reference.coordination_initial);

@@ -115,15 +115,15 @@
 //! - [`FlowError`] — typed errors naming the pore, channel or link, the step and sub-step:
 //!   negative aperture, non-positive length or volume, closure failure, non-finite values,
 //!   too many sub-steps.
-//! - [`permeability`] — the steady flow of a network solved directly, the permeability of the
-//!   bar of A-Sect. 3.2 (A-Eq. 56), and [`permeability::calibrate_t2t_factor`], the T2T
-//!   reduction factor γ (A-Eq. 9) for which it equals a target (A-Sect. 3: "DEM and CFD were
-//!   separately calibrated").
+//! - `permeability` (feature `calibration`) — the steady flow of a network solved directly,
+//!   the permeability of the bar of A-Sect. 3.2 (A-Eq. 56), and
+//!   `permeability::calibrate_t2t_factor`, the T2T reduction factor γ (A-Eq. 9) for which it
+//!   equals a target (A-Sect. 3: "DEM and CFD were separately calibrated").
 //!
 //! Determinism: per-channel and per-pore results are computed in parallel (rayon) and
 //! combined per pore in a fixed order, so runs on any number of threads give identical bits.
 //!
-//! ## Verification ([`verification::cases`])
+//! ## Verification (`verification::cases`, feature `verification`)
 //!
 //! - Pressure diffusion along a chain of pores against the Fourier series.
 //! - The Darcy permeability test of A-Sect. 3.2 (A-Eq. 56) on the paper's bar: a seeded
@@ -151,9 +151,11 @@ mod forces;
 mod implicit;
 mod network;
 mod params;
+#[cfg(feature = "calibration")]
 pub mod permeability;
 mod state;
 pub mod stepper;
+#[cfg(feature = "verification")]
 pub mod verification;
 
 pub use eos_fluid::EosFluid;

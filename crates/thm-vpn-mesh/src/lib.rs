@@ -195,4 +195,5 @@ pub use motion::{
 pub use picture::{PictureStyle, write_mesh_png};
 pub use remap::{CellFilter, RemapOperator};
 
+#[cfg(feature = "verification")]
 pub mod verification;

@@ -99,7 +99,7 @@
 //! ([`square::slab_factor`]) with `k_xx` and `k_yy` (tested equal to B-Eq. 59 when they are
 //! equal), and with B-Eq. 59 for their mean.
 //!
-//! Verified by `coupling/mpm_dem_square` (and `_quick`, [`verification`]) at a reduced size,
+//! Verified by `coupling/mpm_dem_square` (and `_quick`, `verification::multiscale`) at a reduced size,
 //! with the friction heat off (`square::GranularSquare::friction_heat`): with B-Table 1's
 //! `ρ c = 1 J/(m³ K)` the quasi-static friction work of the heated RVEs (the same for density
 //! scalings 20 to 400) is worth tens of kelvin, which B-Eq. 59 does not have; and the RVEs'
@@ -120,7 +120,7 @@
 //! against the small-mass nodes the bulging sides graze, the consolidated packing set at rest
 //! before the density scaling, the stress ratio from the plate reaction. Cases
 //! `coupling/mpm_dem_biaxial_quick` and `coupling/mpm_dem_biaxial`
-//! ([`biaxial_verification`]); `docs/cases/mpm_dem_biaxial.md`.
+//! (`verification::biaxial`, feature `verification`); `docs/cases/mpm_dem_biaxial.md`.
 //!
 //! ## The column collapse (B-Sect. 5.3.3, [`column`](mod@column))
 //!
@@ -133,32 +133,28 @@
 //! friction heat to round-off, and the reduction of skewed RVE cells in the flow
 //! (`thm_rve::RveState::reduce_cell`). A rank-one fabric conductivity of an RVE dilated in the
 //! flow is kept positive semi-definite within rounding ([`stages::psd_conductivity`]). Cases
-//! `coupling/mpm_dem_column_quick` and `coupling/mpm_dem_column` ([`column_verification`]);
+//! `coupling/mpm_dem_column_quick` and `coupling/mpm_dem_column` (`verification::column`);
 //! `docs/cases/mpm_dem_column.md`.
 //!
 //! **Silo discharge** (B-Sect. 5.3.2, [`silo`]): a 1 m silo with a 45° hopper and a 0.2 m
 //! opening 1 m above the ground, walls of finite extent (`thm_mpm::RigidWall::segment`), the
 //! sample settled with the opening closed and then discharged freely or under a plate moving
 //! down at 0.2 m/s; the stored heat equals the RVEs' friction work to round-off. Cases
-//! `coupling/mpm_dem_silo_quick` and `coupling/mpm_dem_silo` ([`silo_verification`]);
+//! `coupling/mpm_dem_silo_quick` and `coupling/mpm_dem_silo` (`verification::silo`);
 //! `docs/cases/mpm_dem_silo.md`.
 //!
 //! Units: SI; the MPM side of the rod, the square, the biaxial test and the column in °C.
 
 pub mod biaxial;
-pub mod biaxial_verification;
 pub mod column;
-pub mod column_verification;
 pub mod distributed;
 pub mod error;
 pub mod material;
 pub mod params;
 pub mod rod;
 pub mod silo;
-pub mod silo_verification;
 pub mod square;
 pub mod stages;
-pub mod verification;
 
 pub use biaxial::{BiaxialModel, BiaxialTest, Compaction};
 pub use column::{ColumnModel, ColumnTest};

@@ -4,12 +4,10 @@
 //! pure-MPM twin with the moduli measured on the RVE.
 //!
 //! The grid, boundary conditions and points are those of `thm-mpm`'s own TM-MPM square
-//! (`thm_mpm::verification::heated_square`), so the two models differ only in the material.
+//! (`thm_mpm::setups::heated_square`), so the two models differ only in the material.
 
 use serde::{Deserialize, Serialize};
-use thm_mpm::{
-    LinearThermoElastic, Mpm, MpmState, ThermoElasticParameters, verification::heated_square,
-};
+use thm_mpm::{LinearThermoElastic, Mpm, MpmState, ThermoElasticParameters, setups::heated_square};
 use thm_rve::{ConsolidationParams, PackingParams, RveParams, RveState, consolidate, measure};
 
 use super::error::MultiscaleError;
@@ -39,7 +37,7 @@ pub struct GranularSquare {
     pub dem_time: DemTimeRule,
     /// Whether the friction heat of the RVEs (B-Eqs. 32–33) heats the points (the paper's
     /// model). With B-Table 1's `ρ c = 1 J/(m³ K)` the friction work of the heated RVEs raises
-    /// the square's temperature by tens of kelvin (see [`super::verification`]); B-Eq. 59 is
+    /// the square's temperature by tens of kelvin (see `verification::multiscale`); B-Eq. 59 is
     /// conduction alone, so the verification runs with it off and reports the work.
     #[serde(default = "friction_heat_default")]
     pub friction_heat: bool,

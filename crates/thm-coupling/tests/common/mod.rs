@@ -1,10 +1,11 @@
 //! The small bonded packing of `thm_coupling::verification`, shared by the tests.
 #![allow(dead_code)]
 
+pub use thm_coupling::bar::{WaterAir as Fluid, water_air as fluid};
 use thm_coupling::pore_scale::{
     PoreScaleConfig, PoreScaleParams, PoreScaleState, PoreScaleStepper, Skeleton,
 };
-pub use thm_coupling::verification::{WaterAir as Fluid, eager_remesh, water_air as fluid};
+pub use thm_coupling::verification::eager_remesh;
 use thm_vpn_mesh::RemeshCriteriaParams;
 
 pub const SPACING: f64 = thm_coupling::verification::LATTICE_SPACING;

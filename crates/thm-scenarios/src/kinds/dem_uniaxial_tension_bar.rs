@@ -1,6 +1,6 @@
 //! `kind = "dem_uniaxial_tension_bar"`: the uniaxial tension test of the bonded bar of
 //! Krzaczek et al. (2023), A-Sect. 3.1, on `thm-dem`, as driven by
-//! [`thm_dem::verification::BarTension`].
+//! [`thm_dem::tension::BarTension`].
 //!
 //! A single layer of plane-constrained spheres (a seeded 20 × 80 mm packing, diameters 4–8 mm,
 //! or a packing CSV file written by `thm_dem::packing::Packing::write_csv`), bonded stress-free
@@ -20,7 +20,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 use thm_dem::packing::{Packing, PackingParams, random_packing};
-use thm_dem::verification::{BarLoading, BarTension, Grip, rising_branch_modulus};
+use thm_dem::tension::{BarLoading, BarTension, Grip, rising_branch_modulus};
 use thm_dem::{BondRadius, BondState, CohesiveFrictionalParams, DemState, critical_time_step};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 
@@ -50,7 +50,7 @@ pub struct PackingSection {
 }
 
 fn default_porosity() -> f64 {
-    thm_dem::verification::GENERATOR_POROSITY
+    thm_dem::tension::GENERATOR_POROSITY
 }
 fn default_bond_gap() -> Quantity<Length> {
     Quantity::new(4.0, "mm")

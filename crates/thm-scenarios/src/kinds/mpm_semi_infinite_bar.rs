@@ -1,5 +1,5 @@
 //! `kind = "mpm_semi_infinite_bar"`: the thermo-elastic bar of B-Sect. 5.1.1 (Zhao et al.
-//! 2022) on `thm-mpm`, as built by `thm_mpm::verification::semi_infinite_bar`.
+//! 2022) on `thm-mpm`, as built by `thm_mpm::setups::semi_infinite_bar`.
 //!
 //! A 6 m bar of unit density, specific heat, conductivity and Young's modulus (ν = 0,
 //! β = 10⁻⁶ 1/K), free at both ends and held in uniaxial strain, is heated at x = 0 from 0 to
@@ -113,7 +113,7 @@ impl Scenario for SemiInfiniteBar {
                 ),
             ));
         }
-        let model = thm_mpm::verification::semi_infinite_bar(cells)
+        let model = thm_mpm::setups::semi_infinite_bar(cells)
             .map_err(|e| ConfigError::new("bar", e.to_string()))?;
         let limit = model
             .mpm
@@ -174,7 +174,7 @@ impl Scenario for SemiInfiniteBar {
 
     fn reference(&self, column: usize, time: f64) -> Option<f64> {
         (column == 0).then(|| {
-            thm_mpm::reference::semi_infinite_temperature(
+            thm_mpm::analytical::semi_infinite_temperature(
                 self.probe,
                 time,
                 DIFFUSIVITY,

@@ -11,11 +11,11 @@ use thm_coupling::bar::{
     BarCase, CASE_A_DENSITY_SCALE, EquivalentMedium, bar_params, bar_state, case_a_coupling_step,
     centreline_cells, crack_report, largest_bond_tension, mean_mass_flux, scale_sphere_density,
 };
+use thm_coupling::bar::{WaterAir, water_air};
 use thm_coupling::pore_scale::{
     CouplingError, CouplingStepParams, CouplingStepRule, PoreScaleParams, PoreScaleState,
     PoreScaleStepper, PressureForce, StageSeconds,
 };
-use thm_coupling::verification::{WaterAir, water_air};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 
 use crate::config::TimeControl;

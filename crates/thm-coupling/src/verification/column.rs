@@ -1,4 +1,4 @@
-//! Verification cases of the column collapse of B-Sect. 5.3.3 ([`super::column`]), collected
+//! Verification cases of the column collapse of B-Sect. 5.3.3 ([`crate::multiscale::column`]), collected
 //! by `thm_coupling::verification`.
 //!
 //! Both run a reduced column: 4 × 4 cells of 0.5 m with 2 × 2 points each (64 RVEs),
@@ -30,7 +30,7 @@
 
 use thm_verify::{Case, CaseError, CaseOutput, Plot, Row, Series, SeriesRole};
 
-use super::column::{ColumnModel, ColumnRecord, ColumnTest};
+use crate::multiscale::column::{ColumnModel, ColumnRecord, ColumnTest};
 
 /// The cases of this module.
 pub fn cases() -> Vec<Case> {

@@ -1,4 +1,4 @@
-//! Verification cases of the silo discharge of B-Sect. 5.3.2 ([`super::silo`]), collected by
+//! Verification cases of the silo discharge of B-Sect. 5.3.2 ([`crate::multiscale::silo`]), collected by
 //! `thm_coupling::verification`.
 //!
 //! Both run the silo at a reduced resolution ([`reduced_silo`]): 0.1 m cells with 2 × 2
@@ -23,7 +23,7 @@
 
 use thm_verify::{Case, CaseError, CaseOutput, Plot, Row, Series, SeriesRole};
 
-use super::silo::{SiloModel, SiloRecord, SiloTest};
+use crate::multiscale::silo::{SiloModel, SiloRecord, SiloTest};
 
 /// The cases of this module.
 pub fn cases() -> Vec<Case> {

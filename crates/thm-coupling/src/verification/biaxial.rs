@@ -1,4 +1,4 @@
-//! Verification cases of the biaxial test of B-Sect. 5.3.1 ([`super::biaxial`]), collected by
+//! Verification cases of the biaxial test of B-Sect. 5.3.1 ([`crate::multiscale::biaxial`]), collected by
 //! `thm_coupling::verification`.
 //!
 //! 1. `coupling/mpm_dem_biaxial_quick`: the dense specimen at 2 × 4 cells with 2 × 2 points
@@ -30,7 +30,7 @@
 
 use thm_verify::{Case, CaseError, CaseOutput, Plot, Row, Series, SeriesRole};
 
-use super::biaxial::{BiaxialModel, BiaxialRecord, BiaxialTest, Compaction};
+use crate::multiscale::biaxial::{BiaxialModel, BiaxialRecord, BiaxialTest, Compaction};
 
 /// The cases of this module.
 pub fn cases() -> Vec<Case> {

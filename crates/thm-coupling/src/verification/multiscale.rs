@@ -57,8 +57,10 @@
 
 use thm_verify::{Case, CaseError, CaseOutput, Plot, Row, Series, SeriesRole};
 
-use super::rod::{GranularRod, RodModel, rod_displacement, rod_stress, rod_temperature};
-use super::square::{GranularSquare, SquareModel, slab_factor};
+use crate::multiscale::rod::{
+    GranularRod, RodModel, rod_displacement, rod_stress, rod_temperature,
+};
+use crate::multiscale::square::{GranularSquare, SquareModel, slab_factor};
 
 /// The cases of this module.
 pub fn cases() -> Vec<Case> {

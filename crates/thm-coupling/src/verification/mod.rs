@@ -32,18 +32,22 @@
 //!    A-Eq. 63 (A-Eqs. 60–61, and with advection at the measured mass flux), densities,
 //!    speeds, bar Péclet numbers and the temperature differences between the runs.
 
+pub mod biaxial;
+pub mod column;
+pub mod multiscale;
+pub mod silo;
+
 use thm_dem::packing::lattice_packing;
 use thm_dem::{CohesiveFrictionalParams, Kinematics, StepperParams};
-use thm_eos::{Model, PengRobinson, water_air_closure};
 use thm_fvm_heat::HeatParams;
 use thm_verify::{Case, CaseError, CaseOutput, Plot, Row, Series, SeriesRole};
-use thm_vpn_flow::{EosFluid, FlowParameters};
+use thm_vpn_flow::FlowParameters;
 use thm_vpn_mesh::{MeshParams, Outline, RemeshCriteriaParams};
 
 use crate::bar::{
-    BarCase, CASE_A_BOND_TENSILE_STRENGTH, CASE_A_DENSITY_SCALE, EquivalentMedium, bar_params,
-    bar_state, case_a_coupling_step, centreline_cells, crack_report, largest_bond_tension,
-    mean_mass_flux, scale_sphere_density,
+    BarCase, CASE_A_BOND_TENSILE_STRENGTH, CASE_A_DENSITY_SCALE, EquivalentMedium, WaterAir,
+    bar_params, bar_state, case_a_coupling_step, centreline_cells, crack_report,
+    largest_bond_tension, mean_mass_flux, scale_sphere_density, water_air,
 };
 use crate::pore_scale::{
     CouplingError, CouplingStepRule, FlowScheme, HeatScheme, InitialFluid, PoreScaleConfig,
@@ -84,20 +88,12 @@ pub fn cases() -> Vec<Case> {
         quick: true,
         run: contraction_free_start_case,
     });
-    cases.extend(crate::multiscale::verification::cases());
-    cases.extend(crate::multiscale::biaxial_verification::cases());
-    cases.extend(crate::multiscale::biaxial_verification::bonded_cases());
-    cases.extend(crate::multiscale::column_verification::cases());
-    cases.extend(crate::multiscale::silo_verification::cases());
+    cases.extend(multiscale::cases());
+    cases.extend(biaxial::cases());
+    cases.extend(biaxial::bonded_cases());
+    cases.extend(column::cases());
+    cases.extend(silo::cases());
     cases
-}
-
-/// Paper A's fluids: Peng–Robinson water with the volume correction and air (A-Eqs. 16–29).
-pub type WaterAir = EosFluid<PengRobinson, PengRobinson>;
-
-/// Paper A's water–air closure (A-Eqs. 16–29, Table 1).
-pub fn water_air() -> WaterAir {
-    EosFluid(water_air_closure(Model::PrCorrected))
 }
 
 /// Lattice spacing of the test packing \[m\].
