@@ -18,9 +18,9 @@
 //! for the A-Sect. 3 bar a generator porosity of 10 % leaves 12.8 % uncovered, 6 % leaves
 //! about 10.6 %.
 
-use crate::contact::LinearSpringParams;
+use crate::contact::{ContactHistory, LinearSpringParams};
 use crate::error::{DemError, check_positive, check_range};
-use crate::state::{DemState, Kinematics, ParticleState, Wall};
+use crate::state::{ContactList, DemState, Kinematics, ParticleState, Wall};
 use crate::stepper::{Stepper, StepperParams};
 use crate::vec3::Vec3;
 use rand::{Rng, SeedableRng};
@@ -168,10 +168,9 @@ impl Packing {
                 });
             }
             let pen = self.radii[a] + self.radii[b] - (self.centres[b] - self.centres[a]).norm();
-            state.contacts.push(
-                [a as u32, b as u32],
-                crate::contact::ContactHistory::bonded_at(pen),
-            );
+            state
+                .contacts
+                .push([a as u32, b as u32], ContactHistory::bonded_at(pen));
         }
         let sorted = state.contacts.pair.windows(2).all(|w| w[0] < w[1]);
         if !sorted {
@@ -628,4 +627,43 @@ pub fn lattice_packing(
         radii,
         bonds,
     })
+}
+
+/// Bonds from a neighbour search (here rather than in `state`, which the search itself
+/// reads).
+impl DemState {
+    /// Installs stress-free bonds between all pairs whose surfaces are closer than
+    /// `max_gap` \[m\] (or overlap): the bond's zero-force penetration is the current one.
+    /// Existing contacts between such pairs become bonded; a neighbour search is forced.
+    pub fn install_bonds(&mut self, max_gap: f64) -> Result<usize, DemError> {
+        crate::error::check_range("max_gap", max_gap, 0.0, f64::MAX, "[0, ∞)")?;
+        let pairs = crate::neighbour::pairs_within(&self.particles, max_gap);
+        let mut merged = ContactList::default();
+        let mut old = 0;
+        let mut count = 0;
+        for (a, b) in pairs {
+            let key = [a as u32, b as u32];
+            while old < self.contacts.len() && self.contacts.pair[old] < key {
+                merged.push(self.contacts.pair[old], self.contacts.history[old]);
+                old += 1;
+            }
+            let pen = self.particles.radius[a] + self.particles.radius[b]
+                - (self.particles.position[b] - self.particles.position[a]).norm();
+            let mut h = ContactHistory::bonded_at(pen);
+            if old < self.contacts.len() && self.contacts.pair[old] == key {
+                h.normal = self.contacts.history[old].normal;
+                old += 1;
+            }
+            merged.push(key, h);
+            count += 1;
+        }
+        while old < self.contacts.len() {
+            merged.push(self.contacts.pair[old], self.contacts.history[old]);
+            old += 1;
+        }
+        self.contacts = merged;
+        self.search_reference_position.clear();
+        self.contact_generation += 1;
+        Ok(count)
+    }
 }

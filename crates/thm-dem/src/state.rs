@@ -548,41 +548,6 @@ impl DemState {
         2.0 * self.contacts.active_count() as f64 / self.particles.len() as f64
     }
 
-    /// Installs stress-free bonds between all pairs whose surfaces are closer than
-    /// `max_gap` \[m\] (or overlap): the bond's zero-force penetration is the current one.
-    /// Existing contacts between such pairs become bonded; a neighbour search is forced.
-    pub fn install_bonds(&mut self, max_gap: f64) -> Result<usize, DemError> {
-        crate::error::check_range("max_gap", max_gap, 0.0, f64::MAX, "[0, ∞)")?;
-        let pairs = crate::neighbour::pairs_within(&self.particles, max_gap);
-        let mut merged = ContactList::default();
-        let mut old = 0;
-        let mut count = 0;
-        for (a, b) in pairs {
-            let key = [a as u32, b as u32];
-            while old < self.contacts.len() && self.contacts.pair[old] < key {
-                merged.push(self.contacts.pair[old], self.contacts.history[old]);
-                old += 1;
-            }
-            let pen = self.particles.radius[a] + self.particles.radius[b]
-                - (self.particles.position[b] - self.particles.position[a]).norm();
-            let mut h = ContactHistory::bonded_at(pen);
-            if old < self.contacts.len() && self.contacts.pair[old] == key {
-                h.normal = self.contacts.history[old].normal;
-                old += 1;
-            }
-            merged.push(key, h);
-            count += 1;
-        }
-        while old < self.contacts.len() {
-            merged.push(self.contacts.pair[old], self.contacts.history[old]);
-            old += 1;
-        }
-        self.contacts = merged;
-        self.search_reference_position.clear();
-        self.contact_generation += 1;
-        Ok(count)
-    }
-
     /// Renumbers the particles of a running state: particle `i` becomes the one that was
     /// `order[i]` (e.g. [`crate::packing::locality_order`] of the current positions, as
     /// LIGGGHTS sorts its atoms every 1 000 steps of a flowing bed). Every per-particle array,

@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 use thm_vpn_mesh::{BoundarySide, FaceKind, PoreMesh};
 
 use crate::HeatError;
-use crate::properties::prandtl_cube_root;
+use crate::properties::{MixtureProperties, Phase, mixture, prandtl_cube_root};
 
 /// Thermal properties of the solid (the spheres), Table 1 of Krzaczek et al. (2023).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -237,14 +237,6 @@ impl Solid {
     }
 }
 
-/// Validated fluid-phase properties.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Phase {
-    pub(crate) specific_heat: f64,
-    pub(crate) conductivity: f64,
-    pub(crate) dynamic_viscosity: f64,
-}
-
 /// Validated boundary condition of one side.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum SideCondition {
@@ -462,5 +454,23 @@ fn validate_schedule(path: &str, s: &TemperatureSchedule) -> Result<(), HeatErro
             }
             Ok(())
         }
+    }
+}
+
+impl HeatModel {
+    /// Mixture properties of a fluid cell.
+    pub fn fluid_mixture(
+        &self,
+        liquid_fraction: f64,
+        liquid_density: f64,
+        gas_density: f64,
+    ) -> MixtureProperties {
+        mixture(
+            &self.liquid,
+            &self.gas,
+            liquid_fraction,
+            liquid_density,
+            gas_density,
+        )
     }
 }

@@ -1,7 +1,13 @@
 //! Effective mixture properties (A-Eqs. 32–36) and the fluid–solid heat transfer coefficient
 //! from Nusselt correlations (A-Eqs. 43–45).
 
-use crate::params::{HeatModel, Phase};
+/// Validated fluid-phase properties.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Phase {
+    pub(crate) specific_heat: f64,
+    pub(crate) conductivity: f64,
+    pub(crate) dynamic_viscosity: f64,
+}
 
 /// Effective properties of the homogenised two-phase fluid in one cell.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -252,24 +258,6 @@ impl ExchangeFactors {
             2.0 + 1.1 * self.x06 * dp.d06
         };
         nu * self.conductivity * dp.inv_d
-    }
-}
-
-impl HeatModel {
-    /// Mixture properties of a fluid cell.
-    pub fn fluid_mixture(
-        &self,
-        liquid_fraction: f64,
-        liquid_density: f64,
-        gas_density: f64,
-    ) -> MixtureProperties {
-        mixture(
-            &self.liquid,
-            &self.gas,
-            liquid_fraction,
-            liquid_density,
-            gas_density,
-        )
     }
 }
 

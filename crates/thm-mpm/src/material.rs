@@ -7,7 +7,7 @@
 //! [`crate::MpmState`], so a model may be anything from linear elasticity to a DEM RVE.
 
 use crate::error::MpmError;
-use crate::points::{Mat2, Sym2};
+use crate::points::{Mat2, Sym2, validate_conductivity};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
@@ -177,19 +177,6 @@ pub struct LinearThermoElastic {
     shear_modulus: f64,
     thermal_expansion: f64,
     conductivity: Sym2,
-}
-
-/// Checks that a conductivity tensor is finite, symmetric positive semi-definite.
-pub fn validate_conductivity(name: &str, k: Sym2) -> Result<(), MpmError> {
-    if !(k.iter().all(|v| v.is_finite()) && k[0] >= 0.0 && k[1] >= 0.0) || k[0] * k[1] < k[2] * k[2]
-    {
-        return Err(MpmError::InvalidParameter {
-            name: name.into(),
-            value: k[0].min(k[1]),
-            allowed: "symmetric positive semi-definite [kxx, kyy, kxy] W/(m K)",
-        });
-    }
-    Ok(())
 }
 
 impl LinearThermoElastic {

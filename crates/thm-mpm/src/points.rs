@@ -78,7 +78,7 @@ impl PointProperties {
         };
         pos("density", self.density, "(0, inf) kg/m^3")?;
         pos("specific_heat", self.specific_heat, "(0, inf) J/(kg K)")?;
-        crate::material::validate_conductivity("conductivity", self.conductivity)?;
+        validate_conductivity("conductivity", self.conductivity)?;
         for (name, v) in [
             ("temperature", self.temperature),
             ("velocity[0]", self.velocity[0]),
@@ -317,4 +317,17 @@ impl Default for MaterialPoints {
     fn default() -> Self {
         Self::new()
     }
+}
+
+/// Checks that a conductivity tensor is finite, symmetric positive semi-definite.
+pub fn validate_conductivity(name: &str, k: Sym2) -> Result<(), MpmError> {
+    if !(k.iter().all(|v| v.is_finite()) && k[0] >= 0.0 && k[1] >= 0.0) || k[0] * k[1] < k[2] * k[2]
+    {
+        return Err(MpmError::InvalidParameter {
+            name: name.into(),
+            value: k[0].min(k[1]),
+            allowed: "symmetric positive semi-definite [kxx, kyy, kxy] W/(m K)",
+        });
+    }
+    Ok(())
 }

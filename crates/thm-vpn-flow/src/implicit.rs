@@ -1,6 +1,10 @@
 //! The implicit pressure step ([`FlowStepper::implicit_step`]): backward Euler in the phase
 //! masses, solved by Newton iterations on the pore closure.
 //!
+//! One unit with [`crate::stepper`] (split for length): this file is the implicit scheme's
+//! `impl FlowStepper`, over the stages of [`crate::stages`], and its sparse factorisation
+//! ([`PressureLu`]) is scratch the stepper keeps between steps while the matrix pattern holds.
+//!
 //! The explicit update is limited by the compressibility of the pore fluid: for water-filled
 //! pores `K/V Σ C` is so large that the stable sub-step is ~10⁻⁸ s. A sub-step of length `h`
 //! here seeks the masses `m^{n+1} = m^n + h F(P^{n+1})` whose closure (A-Eq. 29) gives the

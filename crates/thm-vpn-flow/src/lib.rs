@@ -153,6 +153,7 @@ mod network;
 mod params;
 #[cfg(feature = "calibration")]
 pub mod permeability;
+pub mod stages;
 mod state;
 pub mod stepper;
 #[cfg(feature = "verification")]

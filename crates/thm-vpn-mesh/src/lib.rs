@@ -170,6 +170,7 @@
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod circles;
 mod error;
 pub mod export;
 mod mesh;

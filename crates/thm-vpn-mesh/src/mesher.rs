@@ -17,7 +17,7 @@
 //! 7. Locality order: the triangles are sorted along a Z-order (Morton) curve of their
 //!    centroids ([`locality_order`]), and vertices are numbered in order of first use by the
 //!    sorted triangles within groups of the same kinematics, the free one-anchor vertices
-//!    first ([`crate::motion::VertexAnchors::kinematics_order`]). Faces and channels are
+//!    first ([`crate::circles::VertexAnchors::kinematics_order`]). Faces and channels are
 //!    then created in that order too, so cells, vertices and faces that are close in space
 //!    are close in memory: every later pass (the geometry update, the heat and flow
 //!    stencils, the remap) gathers from a few cache lines instead of from all over the mesh.
@@ -29,31 +29,10 @@ use std::collections::HashMap;
 use serde::{Deserialize, Serialize};
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 
+pub use crate::circles::{Circle, Contact};
+use crate::circles::{VertexAnchors, VertexConstraint};
 use crate::error::MeshError;
 use crate::mesh::{CellKind, ChannelKind, NONE, PoreMesh, T2tApertureLaw};
-use crate::motion::{VertexAnchors, VertexConstraint};
-
-/// A sphere projected on the mid-plane.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Circle {
-    /// Centre \[m\].
-    pub centre: [f64; 2],
-    /// Radius \[m\].
-    pub radius: f64,
-    /// The caller's sphere id, recorded in [`CellKind::Solid`] and `vertex_sphere`.
-    pub owner: u32,
-}
-
-/// A contact between two circles (indices into the circle list).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Contact {
-    /// The two circles.
-    pub circles: [u32; 2],
-    /// Effective normal stress at the contact σ_n \[Pa\], compression positive (A-Eq. 8).
-    pub normal_stress: f64,
-}
 
 /// The outer boundary of the meshed domain.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -73,10 +73,11 @@ use thm_rve::{ConsolidationParams, PackingParams, RveParams, RveState, consolida
 
 use super::distributed::{self, SharedDistribution};
 use super::error::MultiscaleError;
-use super::material::{RveMaterial, RvePoint};
+use super::material::RveMaterial;
 use super::params::{
     DemTimeRule, MultiscaleParams, QuasiStaticLimits, check_counts, check_positive,
 };
+use super::point::RvePoint;
 
 fn default_bond_shear_ratio() -> f64 {
     0.5

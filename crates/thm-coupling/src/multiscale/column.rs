@@ -73,8 +73,9 @@ use std::sync::Arc;
 
 use super::distributed::{self, SharedDistribution};
 use super::error::MultiscaleError;
-use super::material::{RveMaterial, RvePoint};
+use super::material::RveMaterial;
 use super::params::{DemTimeRule, MultiscaleParams, check_counts, check_positive};
+use super::point::RvePoint;
 
 /// Parameters of the column collapse (SI; temperatures in °C on the MPM side).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

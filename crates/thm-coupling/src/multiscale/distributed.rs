@@ -4,7 +4,7 @@
 //! Every process runs the same MPM step, which is cheap next to the RVEs and deterministic, so
 //! the processes stay in lock-step. The material points are cut into one contiguous block per
 //! process ([`partition`] of a per-point cost); a process steps only its block's RVEs
-//! ([`RveMaterial::step_block`], rayon threads inside) and the processes all-gather one
+//! ([`BlockMaterial::step_block`], which `RveMaterial` implements with rayon threads inside) and the processes all-gather one
 //! fixed-size record per point ([`PointOutcome`] and the seconds its RVE took, [`WIRE_LEN`]
 //! numbers) in point order. Each RVE is stepped alone and nothing is reduced across RVEs, so every
 //! process continues with the bits of a run on one process, whatever the process and thread
@@ -38,12 +38,40 @@ use std::time::Instant;
 use thm_mpm::{MaterialInput, MaterialResponse};
 
 use super::error::MultiscaleError;
-use super::material::{PointOutcome, RveMaterial, RvePoint, partition, rve_cost};
+use super::point::{PointOutcome, RvePoint, partition, rve_cost};
 
 /// Numbers per point on the wire: the 7 of the response (stress, heat source,
 /// conductivity), 5 diagnostics, the substeps and intact bonds (integers, exact as `f64`) and
 /// the seconds the point's RVE took (its measured cost).
 pub const WIRE_LEN: usize = 15;
+
+/// What the distributed stage needs of a material: stepping a contiguous block of points,
+/// the seconds each point's RVE took, and applying and checking the gathered outcomes
+/// (`super::material::RveMaterial` implements it; the material hands each exchange to the
+/// distribution, which steps this process's block through this seam).
+pub trait BlockMaterial {
+    /// Steps the points `first..first + states.len()` (`inputs` theirs) and writes each
+    /// point's outcome; errors name the failing point by its material index.
+    fn step_block(
+        &mut self,
+        states: &mut [RvePoint],
+        inputs: &[MaterialInput],
+        first: usize,
+        outcomes: &mut [PointOutcome],
+    ) -> Result<(), MultiscaleError>;
+    /// Wall-clock seconds each point of the last block took, in order.
+    fn step_seconds(&self) -> &[f64];
+    /// Applies every point's outcome (all blocks gathered, in point order) to its history
+    /// and response.
+    fn finish(
+        &self,
+        states: &mut [RvePoint],
+        outcomes: &[PointOutcome],
+        responses: &mut [MaterialResponse],
+    );
+    /// The quasi-static check over all points (lowest failing point first).
+    fn check_quasi_static(&self, states: &[RvePoint]) -> Result<(), MultiscaleError>;
+}
 
 /// The collective operations a distributed RVE stage needs. Every process calls each of them
 /// at the same point of the run, in the same order (they are collectives, as in MPI).
@@ -204,9 +232,9 @@ impl Distribution {
     /// One exchange of `material` (B-Algorithm 1, lines 12–19): this process's block stepped,
     /// failures agreed, the outcomes gathered and applied to every point, the quasi-static
     /// check. The same results on every process.
-    pub fn exchange(
+    pub fn exchange<M: BlockMaterial + ?Sized>(
         &mut self,
-        material: &mut RveMaterial,
+        material: &mut M,
         states: &mut [RvePoint],
         inputs: &[MaterialInput],
         responses: &mut [MaterialResponse],

@@ -12,8 +12,9 @@ use thm_mpm::{
 use thm_rve::{Mat2, PeriodicCell, RveParams, RveState, RveStepper, measure};
 
 use super::error::MultiscaleError;
-use super::material::{RveMaterial, RvePoint};
+use super::material::RveMaterial;
 use super::params::{DemTimeRule, MultiscaleParams};
+use super::point::RvePoint;
 
 /// The granular rod's parameters (SI; temperatures in °C on the MPM side).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -48,8 +48,9 @@ use thm_rve::{RveParams, RveState};
 use super::column::{ColumnPacking, consolidated_packing, reduce_cells};
 use super::distributed::{self, SharedDistribution};
 use super::error::MultiscaleError;
-use super::material::{RveMaterial, RvePoint};
+use super::material::RveMaterial;
 use super::params::{DemTimeRule, MultiscaleParams, check_counts, check_positive};
+use super::point::RvePoint;
 
 /// Parameters of the silo discharge (SI; temperatures in °C on the MPM side).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -11,8 +11,9 @@ use thm_mpm::{LinearThermoElastic, Mpm, MpmState, ThermoElasticParameters, setup
 use thm_rve::{ConsolidationParams, PackingParams, RveParams, RveState, consolidate, measure};
 
 use super::error::MultiscaleError;
-use super::material::{RveMaterial, RvePoint};
+use super::material::RveMaterial;
 use super::params::{DemTimeRule, MultiscaleParams};
+use super::point::RvePoint;
 
 /// The square's parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

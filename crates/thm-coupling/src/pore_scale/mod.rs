@@ -76,7 +76,7 @@ pub use params::{
 };
 pub use state::{
     InitialFluid, PoreScaleState, cell_capacities, circles_of, contact_normal_stress, contacts_of,
-    solid_capacity_scale, sphere_solid_areas,
+    solid_capacity_scale, sphere_solid_areas, sphere_temperatures,
 };
 
 use std::time::Instant;
@@ -518,7 +518,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
         state.remeshes += 1;
         // The sphere temperatures of the new cells become T_avg^n, so the remap itself
         // changes no radius.
-        let t = stages::sphere_temperatures(&state.mesh, &state.heat, &state.dem)?;
+        let t = state::sphere_temperatures(&state.mesh, &state.heat, &state.dem)?;
         state.dem.particles.temperature = t;
         let (network, model, geometry) = derived(&self.config, state)?;
         self.network = network;

@@ -2,10 +2,7 @@
 //! be tested alone. [`super::PoreScaleStepper::step`] runs them in this order.
 
 use thm_dem::{CohesiveFrictional, DemState, Stepper, Vec3};
-use thm_fvm_heat::{
-    FlowInput, HeatGeometry, HeatModel, HeatParams, HeatState, HeatStepper,
-    sphere_mean_temperatures,
-};
+use thm_fvm_heat::{FlowInput, HeatGeometry, HeatModel, HeatParams, HeatState, HeatStepper};
 use thm_vpn_flow::{
     FlowConfig, FlowState, FlowStepper, Network, PoreFluid, SECOND_END, add_pressure_forces,
     add_shear_forces,
@@ -18,7 +15,9 @@ use thm_vpn_mesh::{
 use super::error::CouplingError;
 use super::params::{FlowScheme, HeatScheme};
 use super::pore_forces::UndrainedPores;
-use super::state::{circles_of, contact_normal_stress, contacts_of, fluid_capacity};
+use super::state::{
+    circles_of, contact_normal_stress, contacts_of, fluid_capacity, sphere_temperatures,
+};
 
 /// Stage 1 (A-Eqs. 52–54): the fluid forces on the spheres from the pore pressures on the wall
 /// faces (when `wall_pressure`) and the S2S wall shear, written into
@@ -475,25 +474,6 @@ pub fn sphere_radii(
         *rate = (r - r0) / dt;
     }
     Ok(())
-}
-
-/// The volume-average temperature of every sphere's solid cells (its current temperature
-/// where it has none).
-pub fn sphere_temperatures(
-    mesh: &PackingMesh,
-    heat: &HeatState,
-    dem: &DemState,
-) -> Result<Vec<f64>, CouplingError> {
-    let mut mean = Vec::new();
-    sphere_mean_temperatures(&mesh.mesh, &heat.temperature, &mut mean)
-        .map_err(CouplingError::Heat)?;
-    Ok(dem
-        .particles
-        .temperature
-        .iter()
-        .enumerate()
-        .map(|(i, &t)| mean.get(i).copied().flatten().unwrap_or(t))
-        .collect())
 }
 
 /// The result of a remesh: the new mesh and its contacts, the remapped fluid and heat states.

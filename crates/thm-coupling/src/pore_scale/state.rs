@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 use thm_dem::DemState;
-use thm_fvm_heat::{HeatParams, HeatState};
+use thm_fvm_heat::{HeatParams, HeatState, sphere_mean_temperatures};
 use thm_vpn_flow::{FlowState, Network, PoreFluid};
 use thm_vpn_mesh::{
     CellKind, Circle, Contact, PackingMesh, mesh_packing, mesher::overlapping_pairs,
@@ -221,7 +221,7 @@ impl PoreScaleState {
             steps: 0,
             temperature: cell_temperature,
         };
-        dem.particles.temperature = super::stages::sphere_temperatures(&mesh, &heat, &dem)?;
+        dem.particles.temperature = sphere_temperatures(&mesh, &heat, &dem)?;
         let n = dem.particles.len();
         let solid_area_ref = sphere_solid_areas(&mesh.mesh, n);
         Ok(Self {
@@ -282,4 +282,23 @@ pub fn cell_capacities(state: &PoreScaleState, heat: &HeatParams) -> Vec<f64> {
 #[inline]
 pub(crate) fn fluid_capacity(liquid_mass: f64, gas_mass: f64, heat: &HeatParams) -> f64 {
     liquid_mass * heat.liquid.specific_heat + gas_mass * heat.gas.specific_heat
+}
+
+/// The volume-average temperature of every sphere's solid cells (its current temperature
+/// where it has none).
+pub fn sphere_temperatures(
+    mesh: &PackingMesh,
+    heat: &HeatState,
+    dem: &DemState,
+) -> Result<Vec<f64>, CouplingError> {
+    let mut mean = Vec::new();
+    sphere_mean_temperatures(&mesh.mesh, &heat.temperature, &mut mean)
+        .map_err(CouplingError::Heat)?;
+    Ok(dem
+        .particles
+        .temperature
+        .iter()
+        .enumerate()
+        .map(|(i, &t)| mean.get(i).copied().flatten().unwrap_or(t))
+        .collect())
 }
