@@ -69,14 +69,16 @@ fn step(model: &mut BiaxialModel) -> Result<Sample, Box<dyn std::error::Error>> 
         .material
         .distribution()
         .map(|d| distributed::lock(d).stats());
-    let dt = model.test.time_step;
+    let dt = model.case.test.time_step;
     let t = Instant::now();
     model.update_confinement()?;
     let mut timed = Timed {
-        inner: &mut model.material,
+        inner: &mut model.materials[0],
         exchange: 0.0,
     };
-    model.mpm.step_batch(&mut model.state, &mut timed, dt)?;
+    model.phases[0]
+        .mpm
+        .step_batch(&mut model.state, &mut timed, dt)?;
     let exchange = timed.exchange;
     let total = t.elapsed().as_secs_f64();
     let after = model
@@ -137,7 +139,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // One synchronisation (what a frame or a checkpoint costs): every rank takes the others'
     // RVEs.
     let (mut sync_ms, mut sync_mb) = (0.0, 0.0);
-    if let Some(d) = model.material.distribution() {
+    if let Some(d) = model.material().distribution() {
         let mut g = distributed::lock(d);
         let t = Instant::now();
         g.synchronise(&mut model.state.material)?;

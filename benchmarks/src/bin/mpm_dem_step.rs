@@ -79,17 +79,19 @@ fn step(
     loads: &mut Vec<RveLoad>,
     responses: &mut Vec<RveResponse>,
 ) -> Result<Sample, Box<dyn std::error::Error + Send + Sync>> {
-    let dt = model.test.time_step;
+    let dt = model.case.test.time_step;
     let t = Instant::now();
     model.update_confinement()?;
     let mut timed = Timed {
-        inner: &mut model.material,
+        inner: &mut model.materials[0],
         exchange: 0.0,
         copy: 0.0,
         saved: Vec::new(),
         inputs: Vec::new(),
     };
-    model.mpm.step_batch(&mut model.state, &mut timed, dt)?;
+    model.phases[0]
+        .mpm
+        .step_batch(&mut model.state, &mut timed, dt)?;
     let total = t.elapsed().as_secs_f64();
     let Timed {
         exchange,
@@ -98,7 +100,7 @@ fn step(
         inputs,
         ..
     } = timed;
-    let config = *model.material.config();
+    let config = *model.material().config();
     let p = config.rve().params();
     let params = config.params();
     rve_loads(
@@ -167,7 +169,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
             .build()?;
         let mut model = template.clone();
         let n = model.state.points.len();
-        let mut batch = RveBatch::new(*model.material.config().rve(), n);
+        let mut batch = RveBatch::new(*model.material().config().rve(), n);
         let (mut loads, mut responses) = (Vec::new(), Vec::new());
         let samples = pool.install(
             || -> Result<Vec<Sample>, Box<dyn std::error::Error + Send + Sync>> {

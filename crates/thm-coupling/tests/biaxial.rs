@@ -67,7 +67,7 @@ fn confinement_holds_and_heat_is_friction_work() {
     while !m.finished() {
         m.step().unwrap();
         let r = m.record();
-        let sc = m.test.confining_stress;
+        let sc = m.case.test.confining_stress;
         assert!(
             (r.mean_sigma_xx - sc).abs() <= 0.01 * sc,
             "step {}: mean σ_xx = {} Pa",

@@ -69,11 +69,13 @@ use thm_mpm::{
     GridParameters, MaterialPoints, Mpm, MpmConfig, MpmParameters, MpmState, PointProperties,
     RigidWall, SurfaceLoad,
 };
-use thm_rve::{ConsolidationParams, PackingParams, RveParams, RveState, consolidate, measure};
+use thm_rve::{RveParams, RveState};
 
-use super::distributed::{self, SharedDistribution};
 use super::error::MultiscaleError;
 use super::material::RveMaterial;
+use super::model::{
+    LoadingPhase, MultiscaleModel, PackingProtocol, PackingReport, Protocol, consolidated_packing,
+};
 use super::params::{
     DemTimeRule, MultiscaleParams, QuasiStaticLimits, check_counts, check_positive,
 };
@@ -367,80 +369,27 @@ impl BiaxialTest {
     }
 }
 
-/// What the consolidation of the template packing gave.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PackingReport {
-    /// Void ratio (void over solid area).
-    pub void_ratio: f64,
-    /// Coordination number of the force-carrying contacts.
-    pub coordination_number: f64,
-    /// DEM steps of the consolidation.
-    pub consolidation_steps: u64,
-    /// α of B-Eq. 34 that gives the stated conductivity (K/(W m)).
-    pub thermal_resistance: f64,
-    /// Bulk density of the points `ρ_s/(1 + e)` (kg/m³).
-    pub bulk_density: f64,
-}
-
 /// The consolidated packing of the test (random radii in [0.25, 0.5] mm, `disks` disks,
 /// consolidated isotropically to the confining stress with the consolidation friction), with
-/// α of B-Eq. 34 set for the stated conductivity and μ set to the shear friction.
+/// α of B-Eq. 34 set for the stated conductivity, μ set to the shear friction, and the bonds
+/// of B-Fig. 18 where `bond_strength > 0` (B-Sect. 5.3.3: installed after the consolidation
+/// at the contacts that carry force; they do not melt in these tests).
 pub fn biaxial_packing(
     t: &BiaxialTest,
 ) -> Result<(RveParams, RveState, PackingReport), MultiscaleError> {
     t.validate()?;
-    let mut p = t.rve;
-    p.thermal_resistance = 1.0;
-    let config = p.validate().map_err(MultiscaleError::RveSetup)?;
-    let mut pp = PackingParams::paper_b(t.seed);
-    pp.disk_count = t.disks;
-    let mut state = thm_rve::random_packing(&pp, &config).map_err(MultiscaleError::RveSetup)?;
-    let report = consolidate(
-        &mut state,
-        &config,
-        &ConsolidationParams::isotropic(t.confining_stress, t.consolidation_friction),
-    )
-    .map_err(MultiscaleError::RveSetup)?;
-    // At rest: the consolidation leaves residual velocities (unbalanced-force ratio up to
-    // 10⁻³) whose kinetic energy the density scaling of the DEM time rule would multiply by
-    // `s` (a probe with s = 10⁵ started with 11 times the elastic energy as kinetic energy).
-    for v in state
-        .disks
-        .velocity
-        .iter_mut()
-        .chain(state.disks.angular_velocity.iter_mut())
-    {
-        *v = thm_dem::Vec3::ZERO;
-    }
-    state.friction_heat_total = 0.0;
-    // B-Sect. 5.3.3 (B-Fig. 18): bonds only after the consolidation, at the contacts that
-    // carry force; they do not melt in these tests.
-    if t.bond_strength > 0.0 {
-        p.contact.thermal_bond = Some(thm_dem::ThermalBondParams {
-            strength_coefficient: t.bond_strength,
-            threshold_temperature_rise: f64::MAX,
-            reference_temperature: p.reference_temperature,
-            shear_ratio: t.bond_shear_ratio,
-        });
-        p.validate().map_err(MultiscaleError::RveSetup)?;
-        state.install_bonds();
-    }
-    let k1 = measure::conductivity(&state, &p);
-    p.thermal_resistance = 0.5 * (k1.at(0, 0) + k1.at(1, 1)) / t.conductivity;
-    p.contact.friction_coefficient = t.shear_friction;
-    let void_ratio = state.void_ratio();
-    Ok((
-        p,
-        state,
-        PackingReport {
-            void_ratio,
-            coordination_number: report.coordination_number,
-            consolidation_steps: report.steps,
-            thermal_resistance: p.thermal_resistance,
-            bulk_density: p.density / (1.0 + void_ratio),
+    consolidated_packing(
+        &t.rve,
+        &PackingProtocol {
+            seed: t.seed,
+            disks: t.disks,
+            stress: t.confining_stress,
+            consolidation_friction: t.consolidation_friction,
+            friction: t.shear_friction,
+            conductivity: t.conductivity,
+            bonds: (t.bond_strength > 0.0).then_some((t.bond_strength, t.bond_shear_ratio)),
         },
-    ))
+    )
 }
 
 /// Running sums of the test, carried in checkpoints with the state.
@@ -501,17 +450,10 @@ pub struct BiaxialRecord {
     pub rves_without_pressure: usize,
 }
 
-/// The test as a coupled model.
+/// The biaxial test as a case of the multiscale skeleton: its parameters, what the
+/// consolidation gave, and the boundary points the confinement follows.
 #[derive(Debug, Clone)]
-pub struct BiaxialModel {
-    /// The MPM stepper.
-    pub mpm: Mpm,
-    /// Points with their RVEs.
-    pub state: MpmState<RvePoint>,
-    /// The RVE-backed material.
-    pub material: RveMaterial,
-    /// Running sums.
-    pub totals: BiaxialTotals,
+pub struct Biaxial {
     /// The parameters.
     pub test: BiaxialTest,
     /// What the consolidation gave.
@@ -524,10 +466,14 @@ pub struct BiaxialModel {
     initial_area: f64,
 }
 
+/// The test as a coupled model: one loading phase (the plates and the confinement), one
+/// material.
+pub type BiaxialModel = MultiscaleModel<Biaxial>;
+
 /// Index of the top plate among the walls.
 const TOP_WALL: usize = 1;
 
-impl BiaxialModel {
+impl MultiscaleModel<Biaxial> {
     /// Builds the specimen: consolidates the template packing, lays out the grid (padding of
     /// half the width on each side for the bulge, one cell below and above), the points, the
     /// two plates and the confinement.
@@ -606,17 +552,18 @@ impl BiaxialModel {
         let right = (0..ny).map(|j| j * nx + nx - 1).collect();
         let state = material.state(points);
         let initial_area = state.points.volume.iter().sum();
-        let mut m = Self {
-            mpm: Mpm::new(config),
-            state,
-            material,
-            totals: BiaxialTotals::default(),
+        let case = Biaxial {
             test: *t,
             packing: report,
             left,
             right,
             initial_area,
         };
+        let phase = LoadingPhase {
+            mpm: Mpm::new(config),
+            material: 0,
+        };
+        let mut m = Self::from_parts(case, state, vec![phase], vec![material])?;
         m.update_confinement()?;
         Ok(m)
     }
@@ -625,9 +572,10 @@ impl BiaxialModel {
     /// deformation gradients (see the module docs, choice 2).
     pub fn update_confinement(&mut self) -> Result<(), MultiscaleError> {
         let pts = &self.state.points;
-        let s = self.test.confining_stress;
-        let mut loads = Vec::with_capacity(self.left.len() + self.right.len());
-        for (side, list) in [(1.0, &self.left), (-1.0, &self.right)] {
+        let c = &self.case;
+        let s = c.test.confining_stress;
+        let mut loads = Vec::with_capacity(c.left.len() + c.right.len());
+        for (side, list) in [(1.0, &c.left), (-1.0, &c.right)] {
             for &p in list {
                 let f = pts.deformation_gradient[p];
                 let l = 2.0 * pts.half_size[p][1];
@@ -651,94 +599,81 @@ impl BiaxialModel {
                 }
             }
         }
-        self.mpm.set_surface_loads(loads)?;
+        self.phases[0].mpm.set_surface_loads(loads)?;
         Ok(())
     }
 
-    /// Spreads the RVE stage over the processes of `d` (see [`super::distributed`]).
-    pub fn distribute(&mut self, d: &SharedDistribution) {
-        self.material.distribute(std::sync::Arc::clone(d));
+    /// Axial strain (top plate travel over H).
+    pub fn axial_strain(&self) -> f64 {
+        self.case.test.plate_speed * self.state.time / self.case.test.height
+    }
+}
+
+impl Protocol for Biaxial {
+    type Totals = BiaxialTotals;
+    type Record = BiaxialRecord;
+    type StepStart = ();
+
+    fn time_step(&self) -> f64 {
+        self.test.time_step
     }
 
-    /// Brings every process's RVEs up to date (a no-op without a distribution).
-    pub fn synchronise(&mut self) -> Result<(), MultiscaleError> {
-        match self.material.distribution() {
-            Some(d) => distributed::lock(d).synchronise(&mut self.state.material),
-            None => Ok(()),
-        }
+    fn steps(&self) -> u64 {
+        self.test.steps()
     }
 
-    /// Restores a saved state (points with RVEs) and running sums.
-    pub fn restore(
-        &mut self,
-        state: MpmState<RvePoint>,
-        totals: BiaxialTotals,
-    ) -> Result<(), MultiscaleError> {
-        if state.points.len() != self.state.points.len() {
-            return Err(thm_mpm::MpmError::MaterialStateCount {
-                states: state.points.len(),
-                points: self.state.points.len(),
-            }
-            .into());
-        }
-        self.state = state;
-        self.totals = totals;
-        self.update_confinement()
+    fn phase(_totals: &BiaxialTotals) -> usize {
+        0
     }
 
-    /// One coupled step: confinement from the current boundary, the MPM×DEM step, the heat
-    /// and friction-work sums.
-    pub fn step(&mut self) -> Result<(), MultiscaleError> {
-        self.update_confinement()?;
-        self.mpm
-            .step_batch(&mut self.state, &mut self.material, self.test.time_step)?;
-        let dt = self.test.time_step;
-        let pts = &self.state.points;
+    /// The confinement from the current boundary.
+    fn before_step(model: &mut BiaxialModel) -> Result<(), MultiscaleError> {
+        model.update_confinement()
+    }
+
+    /// The heat and friction-work sums and the plate work.
+    fn after_step(model: &mut BiaxialModel, _phase: usize, (): ()) -> Result<(), MultiscaleError> {
+        let dt = model.case.test.time_step;
+        let pts = &model.state.points;
         let (mut heat, mut up, mut raw) = (0.0, 0.0, 0.0);
         for ((q, v), r) in pts
             .heat_source
             .iter()
             .zip(&pts.volume)
-            .zip(&self.state.material)
+            .zip(&model.state.material)
         {
             heat += q * v * dt;
             up += r.friction_work * v / r.rve_volume;
             raw += r.friction_work;
         }
-        self.totals.heat_generated += heat;
-        self.totals.friction_work_upscaled += up;
-        self.totals.friction_work_rves += raw;
-        self.totals.last_heat = heat;
-        let force = self
+        let totals = &mut model.totals;
+        totals.heat_generated += heat;
+        totals.friction_work_upscaled += up;
+        totals.friction_work_rves += raw;
+        totals.last_heat = heat;
+        let force = model.phases[0]
             .mpm
             .wall_reactions()
             .get(TOP_WALL)
             .map_or(0.0, |r| r[1]);
-        self.totals.plate_work += force * self.test.plate_speed * dt;
+        model.totals.plate_work += force * model.case.test.plate_speed * dt;
         Ok(())
     }
 
-    /// Whether the target strain has been reached.
-    pub fn finished(&self) -> bool {
-        self.state.step >= self.test.steps()
+    /// The confinement of the restored boundary.
+    fn restored(model: &mut BiaxialModel) -> Result<(), MultiscaleError> {
+        model.update_confinement()
     }
 
-    /// Axial strain (top plate travel over H).
-    pub fn axial_strain(&self) -> f64 {
-        self.test.plate_speed * self.state.time / self.test.height
-    }
-
-    /// The history row of the current state.
-    pub fn record(&self) -> BiaxialRecord {
-        self.record_of(&self.state, &self.totals)
-    }
-
-    /// The history row of `state` with running sums `totals` (a state this model's
-    /// stepper advanced last: the plate reaction is the stepper's last one).
-    pub fn record_of(&self, state: &MpmState<RvePoint>, totals: &BiaxialTotals) -> BiaxialRecord {
+    fn record(
+        model: &BiaxialModel,
+        state: &MpmState<RvePoint>,
+        totals: &BiaxialTotals,
+    ) -> BiaxialRecord {
+        let test = &model.case.test;
         let pts = &state.points;
-        let t0 = self.test.initial_temperature;
-        let sc = self.test.confining_stress;
+        let t0 = test.initial_temperature;
+        let sc = test.confining_stress;
         let (mut sxx, mut syy, mut area, mut eth, mut dt_max) = (0.0, 0.0, 0.0, 0.0, 0.0_f64);
         for p in 0..pts.len() {
             let v = pts.volume[p];
@@ -759,20 +694,21 @@ impl BiaxialModel {
                 loose_rves += 1;
             }
         }
-        let plate = self
+        let plate = model.phases[0]
             .mpm
             .wall_reactions()
             .get(TOP_WALL)
-            .map_or(0.0, |r| r[1] / self.test.width);
+            .map_or(0.0, |r| r[1] / test.width);
+        let initial_area = model.case.initial_area;
         BiaxialRecord {
             time: state.time,
-            axial_strain: self.test.plate_speed * state.time / self.test.height,
+            axial_strain: test.plate_speed * state.time / test.height,
             stress_ratio: (plate - sc) / (plate + sc),
             point_stress_ratio: (syy - sxx) / (syy + sxx),
             mean_sigma_xx: sxx,
             mean_sigma_yy: syy,
             plate_stress: plate,
-            volumetric_strain: (area - self.initial_area) / self.initial_area,
+            volumetric_strain: (area - initial_area) / initial_area,
             max_temperature_rise: dt_max,
             heat_generated: totals.heat_generated,
             friction_work_upscaled: totals.friction_work_upscaled,

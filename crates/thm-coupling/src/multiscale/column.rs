@@ -67,13 +67,14 @@ use thm_mpm::{
     GridParameters, MaterialPoints, Mpm, MpmConfig, MpmParameters, MpmState, NodeSet,
     PointProperties, RigidWall, TemperatureCondition,
 };
-use thm_rve::{ConsolidationParams, PackingParams, RveParams, RveState, consolidate, measure};
+use thm_rve::{RveParams, RveState};
 
-use std::sync::Arc;
-
-use super::distributed::{self, SharedDistribution};
 use super::error::MultiscaleError;
 use super::material::RveMaterial;
+use super::model::{
+    HeatBefore, LoadingPhase, MultiscaleModel, PackingProtocol, PackingReport, Protocol,
+    consolidated_packing, flow_step_start, reduce_cells, stored_heat,
+};
 use super::params::{DemTimeRule, MultiscaleParams, check_counts, check_positive};
 use super::point::RvePoint;
 
@@ -368,95 +369,26 @@ impl ColumnTest {
     }
 }
 
-/// What the consolidation of the template packing gave.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct ColumnPacking {
-    /// Void ratio after consolidation (the paper at 10 kPa: 0.251).
-    pub void_ratio: f64,
-    /// Coordination number after consolidation.
-    pub coordination_number: f64,
-    /// α of B-Eq. 34 that gives the stated conductivity (K/(W m)).
-    pub thermal_resistance: f64,
-    /// Bulk density of the points `ρ_s/(1 + e)` (kg/m³).
-    pub bulk_density: f64,
-    /// Contacts carrying force after consolidation (bonds installed per RVE at the release
-    /// when β_a > 0).
-    pub force_contacts: usize,
-}
-
 /// The consolidated packing of the column (random radii in [0.25, 0.5] mm, `disks` disks,
 /// consolidated isotropically to the consolidation stress), at rest, with α of B-Eq. 34 set
-/// for the stated conductivity and μ set for the collapse (no bonds yet).
+/// for the stated conductivity and μ set for the collapse (no bonds yet: they are installed
+/// at the release).
 pub fn column_packing(
     t: &ColumnTest,
-) -> Result<(RveParams, RveState, ColumnPacking), MultiscaleError> {
+) -> Result<(RveParams, RveState, PackingReport), MultiscaleError> {
     t.validate()?;
     consolidated_packing(
         &t.rve,
-        t.seed,
-        t.disks,
-        [t.consolidation_stress, t.consolidation_friction],
-        t.friction,
-        t.conductivity,
-    )
-}
-
-/// The packing protocol of the column and the silo: `disks` random disks (seed `seed`,
-/// radii in [0.25, 0.5] mm) consolidated isotropically to `stress` with friction
-/// `consolidation_friction` (`[stress, consolidation_friction]`), at rest, α of B-Eq. 34 set
-/// so that it conducts `conductivity` (mean of the diagonal), μ set to `friction`, no bonds.
-pub(crate) fn consolidated_packing(
-    rve: &RveParams,
-    seed: u64,
-    disks: usize,
-    [stress, consolidation_friction]: [f64; 2],
-    friction: f64,
-    conductivity: f64,
-) -> Result<(RveParams, RveState, ColumnPacking), MultiscaleError> {
-    let mut p = *rve;
-    p.thermal_resistance = 1.0;
-    p.contact.thermal_bond = None;
-    let config = p.validate().map_err(MultiscaleError::RveSetup)?;
-    let mut pp = PackingParams::paper_b(seed);
-    pp.disk_count = disks;
-    let mut state = thm_rve::random_packing(&pp, &config).map_err(MultiscaleError::RveSetup)?;
-    let report = consolidate(
-        &mut state,
-        &config,
-        &ConsolidationParams::isotropic(stress, consolidation_friction),
-    )
-    .map_err(MultiscaleError::RveSetup)?;
-    // At rest before the density scaling (see the biaxial test, choice 4).
-    for v in state
-        .disks
-        .velocity
-        .iter_mut()
-        .chain(state.disks.angular_velocity.iter_mut())
-    {
-        *v = thm_dem::Vec3::ZERO;
-    }
-    state.friction_heat_total = 0.0;
-    let k1 = measure::conductivity(&state, &p);
-    p.thermal_resistance = 0.5 * (k1.at(0, 0) + k1.at(1, 1)) / conductivity;
-    p.contact.friction_coefficient = friction;
-    let void_ratio = state.void_ratio();
-    let force_contacts = state
-        .contacts
-        .force_on_b
-        .iter()
-        .filter(|f| **f != thm_dem::Vec2::ZERO)
-        .count();
-    Ok((
-        p,
-        state,
-        ColumnPacking {
-            void_ratio,
-            coordination_number: report.coordination_number,
-            thermal_resistance: p.thermal_resistance,
-            bulk_density: p.density / (1.0 + void_ratio),
-            force_contacts,
+        &PackingProtocol {
+            seed: t.seed,
+            disks: t.disks,
+            stress: t.consolidation_stress,
+            consolidation_friction: t.consolidation_friction,
+            friction: t.friction,
+            conductivity: t.conductivity,
+            bonds: None,
         },
-    ))
+    )
 }
 
 /// Running sums and the state at the release, carried in checkpoints with the state.
@@ -521,25 +453,14 @@ pub struct ColumnRecord {
     pub runout: f64,
 }
 
-/// The column as a coupled model.
+/// The column collapse as a case of the multiscale skeleton: its parameters, what the
+/// consolidation gave, and what its protocol and records need.
 #[derive(Debug, Clone)]
-pub struct ColumnModel {
-    /// Points with their RVEs.
-    pub state: MpmState<RvePoint>,
-    /// Running sums.
-    pub totals: ColumnTotals,
+pub struct Column {
     /// The parameters.
     pub test: ColumnTest,
     /// What the consolidation gave.
-    pub packing: ColumnPacking,
-    /// The stepper while settling (both plates, no heating).
-    settle_mpm: Mpm,
-    /// The stepper after the release (right plate gone, heating plate).
-    collapse_mpm: Mpm,
-    /// The material while settling (no bonds).
-    settle_material: RveMaterial,
-    /// The material after the release (bonds, if any).
-    collapse_material: RveMaterial,
+    pub packing: PackingReport,
     /// Flat indices of the heating plate's nodes.
     plate_nodes: Vec<usize>,
     /// Whether each point starts on the heated half.
@@ -548,7 +469,17 @@ pub struct ColumnModel {
     corner: usize,
 }
 
-impl ColumnModel {
+/// The column as a coupled model: two loading phases, settling (both plates, no heating, no
+/// bonds) and the collapse after the release (right plate gone, heating plate, bonds if
+/// any), each with its own material.
+pub type ColumnModel = MultiscaleModel<Column>;
+
+/// The phase while settling.
+const SETTLE: usize = 0;
+/// The phase after the release.
+const COLLAPSE: usize = 1;
+
+impl MultiscaleModel<Column> {
     /// Builds the column: consolidates the template packing, lays out the grid (one cell
     /// left of the heating plate, `runout_cells` to the right of the column, one below the
     /// ground and above the top), the points, the plates.
@@ -562,7 +493,7 @@ impl ColumnModel {
         t: &ColumnTest,
         rve: RveParams,
         packing: RveState,
-        report: ColumnPacking,
+        report: PackingReport,
     ) -> Result<Self, MultiscaleError> {
         t.validate()?;
         let h = t.cell_size();
@@ -655,37 +586,29 @@ impl ColumnModel {
         let ny = t.cells[1] * t.points_per_cell;
         let corner = ny * nx - 1;
         let state = settle_material.state(points);
-        Ok(Self {
-            state,
-            totals: ColumnTotals::default(),
+        let case = Column {
             test: *t,
             packing: report,
-            settle_mpm: Mpm::new(settle_config),
-            collapse_mpm: Mpm::new(collapse_config),
-            settle_material,
-            collapse_material,
             plate_nodes,
             heated_half,
             corner,
-        })
-    }
-
-    /// Restores a saved state (points with RVEs) and running sums.
-    pub fn restore(
-        &mut self,
-        state: MpmState<RvePoint>,
-        totals: ColumnTotals,
-    ) -> Result<(), MultiscaleError> {
-        if state.points.len() != self.state.points.len() {
-            return Err(thm_mpm::MpmError::MaterialStateCount {
-                states: state.points.len(),
-                points: self.state.points.len(),
-            }
-            .into());
-        }
-        self.state = state;
-        self.totals = totals;
-        Ok(())
+        };
+        let phases = vec![
+            LoadingPhase {
+                mpm: Mpm::new(settle_config),
+                material: 0,
+            },
+            LoadingPhase {
+                mpm: Mpm::new(collapse_config),
+                material: 1,
+            },
+        ];
+        Self::from_parts(
+            case,
+            state,
+            phases,
+            vec![settle_material, collapse_material],
+        )
     }
 
     /// Intact bonds on the heated half and on the other.
@@ -696,7 +619,7 @@ impl ColumnModel {
     /// Intact bonds of `state` on the heated half and on the other.
     pub fn intact_bonds_of(&self, state: &MpmState<RvePoint>) -> [u64; 2] {
         let mut n = [0u64; 2];
-        for (r, heated) in state.material.iter().zip(&self.heated_half) {
+        for (r, heated) in state.material.iter().zip(&self.case.heated_half) {
             n[usize::from(!*heated)] += u64::from(r.intact_bonds);
         }
         n
@@ -712,7 +635,7 @@ impl ColumnModel {
         let pts = &state.points;
         let (mut ep, mut ek) = (0.0, 0.0);
         for ((m, x), v) in pts.mass.iter().zip(&pts.position).zip(&pts.velocity) {
-            ep += m * self.test.gravity * x[1];
+            ep += m * self.case.test.gravity * x[1];
             ek += 0.5 * m * (v[0] * v[0] + v[1] * v[1]);
         }
         (ep, ek)
@@ -725,36 +648,14 @@ impl ColumnModel {
 
     /// Stored heat of `state` (J/m).
     pub fn stored_heat_of(&self, state: &MpmState<RvePoint>) -> f64 {
-        let pts = &state.points;
-        let t0 = self.test.initial_temperature;
-        pts.mass
-            .iter()
-            .zip(&pts.specific_heat)
-            .zip(&pts.temperature)
-            .map(|((m, c), t)| m * c * (t - t0))
-            .sum()
-    }
-
-    /// Spreads the RVE stage over the processes of `d` (both materials share it; see
-    /// [`super::distributed`]).
-    pub fn distribute(&mut self, d: &SharedDistribution) {
-        self.settle_material.distribute(Arc::clone(d));
-        self.collapse_material.distribute(Arc::clone(d));
-    }
-
-    /// Brings every process's RVEs up to date (a no-op without a distribution).
-    pub fn synchronise(&mut self) -> Result<(), MultiscaleError> {
-        match self.settle_material.distribution() {
-            Some(d) => distributed::lock(d).synchronise(&mut self.state.material),
-            None => Ok(()),
-        }
+        stored_heat(state, self.case.test.initial_temperature)
     }
 
     /// The release: bonds installed in every RVE (β_a > 0), `E_p0`, the corner position. In a
     /// distributed run every process first takes the current RVEs, so that the bonds are
     /// installed on the same disks everywhere.
     fn release(&mut self) -> Result<(), MultiscaleError> {
-        if self.test.bond_strength > 0.0 {
+        if self.case.test.bond_strength > 0.0 {
             self.synchronise()?;
             for r in &mut self.state.material {
                 r.rve.install_bonds();
@@ -764,7 +665,7 @@ impl ColumnModel {
         self.totals.released = true;
         self.totals.bonds_installed = self.intact_bonds();
         self.totals.potential_energy_at_release = self.energies().0;
-        self.totals.corner_at_release = self.state.points.position[self.corner];
+        self.totals.corner_at_release = self.state.points.position[self.case.corner];
         Ok(())
     }
 
@@ -773,77 +674,71 @@ impl ColumnModel {
     pub fn reduce_cells(&mut self) -> Result<(), MultiscaleError> {
         reduce_cells(&mut self.state)
     }
+}
 
-    /// One coupled step: the release when the settling is over, the MPM×DEM step, the heat
-    /// sums.
-    pub fn step(&mut self) -> Result<(), MultiscaleError> {
-        if !self.totals.released && self.state.step >= self.test.settle_steps() {
-            self.release()?;
+impl Protocol for Column {
+    type Totals = ColumnTotals;
+    type Record = ColumnRecord;
+    type StepStart = HeatBefore;
+
+    fn time_step(&self) -> f64 {
+        self.test.time_step
+    }
+
+    fn steps(&self) -> u64 {
+        self.test.steps()
+    }
+
+    fn phase(totals: &ColumnTotals) -> usize {
+        if totals.released { COLLAPSE } else { SETTLE }
+    }
+
+    /// The release when the settling is over; the heat before the step.
+    fn before_step(model: &mut ColumnModel) -> Result<HeatBefore, MultiscaleError> {
+        if !model.totals.released && model.state.step >= model.case.test.settle_steps() {
+            model.release()?;
         }
-        self.reduce_cells()?;
-        let dt = self.test.time_step;
-        let pts = &mut self.state.points;
-        if !self.test.friction_heat {
-            pts.heat_source.fill(0.0);
-        }
-        let source: f64 = pts
-            .heat_source
-            .iter()
-            .zip(&pts.volume)
-            .map(|(q, v)| q * v * dt)
-            .sum();
-        let stored_before = self.stored_heat();
-        let (mpm, material) = if self.totals.released {
-            (&mut self.collapse_mpm, &mut self.collapse_material)
-        } else {
-            (&mut self.settle_mpm, &mut self.settle_material)
-        };
-        mpm.step_batch(&mut self.state, material, dt)?;
+        let t = &model.case.test;
+        flow_step_start(
+            &mut model.state,
+            t.friction_heat,
+            t.time_step,
+            t.initial_temperature,
+        )
+    }
+
+    /// The heat that entered from the plate (read from the grid: the nodes' capacity times
+    /// their temperature rate less their heat load) and the heat sums.
+    fn after_step(
+        model: &mut ColumnModel,
+        phase: usize,
+        before: HeatBefore,
+    ) -> Result<(), MultiscaleError> {
+        let dt = model.case.test.time_step;
         let mut plate = 0.0;
-        if self.totals.released {
-            let gf = mpm.grid_fields();
-            for &i in &self.plate_nodes {
+        if model.totals.released {
+            let gf = model.phases[phase].mpm.grid_fields();
+            for &i in &model.case.plate_nodes {
                 let s = &gf.sums[i];
                 plate += dt * (s.capacity * gf.temperature_rate[i] - s.heat_load);
             }
         }
-        self.totals.plate_heat += plate;
-        self.totals.source_heat += source;
-        let stored_after = self.stored_heat();
-        self.totals.heat_scale += plate.abs() + source.abs() + (stored_after - stored_before).abs();
+        model.totals.plate_heat += plate;
+        model.totals.source_heat += before.source;
+        let stored_after = model.stored_heat();
+        model.totals.heat_scale +=
+            plate.abs() + before.source.abs() + (stored_after - before.stored).abs();
         Ok(())
     }
 
-    /// The smallest time-step limit of B-Eqs. 30–31 over the points of the current state
-    /// (s), with the RVEs' wave moduli.
-    pub fn time_step_limit(&self) -> f64 {
-        use thm_mpm::BatchConstitutive;
-        let material = if self.totals.released {
-            &self.collapse_material
-        } else {
-            &self.settle_material
-        };
-        self.settle_mpm
-            .time_step_limits_with(&self.state.points, |i| {
-                material.wave_modulus(&self.state.material[i])
-            })
-            .min()
-    }
-
-    /// Whether the run is over.
-    pub fn finished(&self) -> bool {
-        self.state.step >= self.test.steps()
-    }
-
-    /// The history row of the current state.
-    pub fn record(&self) -> ColumnRecord {
-        self.record_of(&self.state, &self.totals)
-    }
-
-    /// The history row of `state` with running sums `totals`.
-    pub fn record_of(&self, state: &MpmState<RvePoint>, totals: &ColumnTotals) -> ColumnRecord {
+    fn record(
+        model: &ColumnModel,
+        state: &MpmState<RvePoint>,
+        totals: &ColumnTotals,
+    ) -> ColumnRecord {
+        let case = &model.case;
         let pts = &state.points;
-        let (ep, ek) = self.energies_of(state);
+        let (ep, ek) = model.energies_of(state);
         let tot = totals;
         let ep0 = if tot.released {
             tot.potential_energy_at_release
@@ -851,13 +746,13 @@ impl ColumnModel {
             ep
         };
         let corner = if tot.released {
-            let x = pts.position[self.corner];
+            let x = pts.position[case.corner];
             let c = tot.corner_at_release;
             ((x[0] - c[0]).powi(2) + (x[1] - c[1]).powi(2)).sqrt()
         } else {
             0.0
         };
-        let intact = self.intact_bonds_of(state);
+        let intact = model.intact_bonds_of(state);
         let broken = if tot.released {
             [
                 tot.bonds_installed[0].saturating_sub(intact[0]),
@@ -866,18 +761,18 @@ impl ColumnModel {
         } else {
             [0, 0]
         };
-        let stored = self.stored_heat_of(state);
+        let stored = model.stored_heat_of(state);
         let residual = if tot.heat_scale > 0.0 {
             (stored - tot.plate_heat - tot.source_heat) / tot.heat_scale
         } else {
             0.0
         };
-        let t0 = self.test.initial_temperature;
+        let t0 = case.test.initial_temperature;
         let (mut tmax, mut rise, mut n, mut runout) =
             (f64::NEG_INFINITY, 0.0, 0usize, f64::NEG_INFINITY);
         for p in 0..pts.len() {
             tmax = tmax.max(pts.temperature[p]);
-            if self.heated_half[p] {
+            if case.heated_half[p] {
                 rise += pts.temperature[p] - t0;
                 n += 1;
             }
@@ -885,7 +780,7 @@ impl ColumnModel {
         }
         ColumnRecord {
             time: state.time,
-            time_after_release: state.time - self.test.settle_steps() as f64 * self.test.time_step,
+            time_after_release: state.time - case.test.settle_steps() as f64 * case.test.time_step,
             potential_energy: ep,
             kinetic_energy: ek,
             potential_ratio: ep / ep0,
@@ -904,24 +799,4 @@ impl ColumnModel {
             runout,
         }
     }
-}
-
-/// Reduces every RVE cell of `state` whose basis has become skewed
-/// (`thm_rve::RveState::reduce_cell`: the same lattice, so nothing physical changes); for
-/// points in a flow (the column, the silo), see the column's module docs, choice 8.
-pub fn reduce_cells(state: &mut MpmState<RvePoint>) -> Result<(), MultiscaleError> {
-    let step = state.step;
-    for (point, r) in state.material.iter_mut().enumerate() {
-        if let Err(source) = r.rve.reduce_cell() {
-            let s = r.rve.cell.strain();
-            return Err(MultiscaleError::Rve {
-                point,
-                step,
-                volumetric_strain: s.volumetric,
-                deviatoric_strain: s.deviatoric,
-                source,
-            });
-        }
-    }
-    Ok(())
 }

@@ -45,10 +45,12 @@ use thm_mpm::{
 };
 use thm_rve::{RveParams, RveState};
 
-use super::column::{ColumnPacking, consolidated_packing, reduce_cells};
-use super::distributed::{self, SharedDistribution};
 use super::error::MultiscaleError;
 use super::material::RveMaterial;
+use super::model::{
+    HeatBefore, LoadingPhase, MultiscaleModel, PackingProtocol, PackingReport, Protocol,
+    consolidated_packing, flow_step_start, stored_heat,
+};
 use super::params::{DemTimeRule, MultiscaleParams, check_counts, check_positive};
 use super::point::RvePoint;
 
@@ -364,20 +366,14 @@ pub struct SiloRecord {
     pub point_b: [f64; 2],
 }
 
-/// The silo as a coupled model.
+/// The silo discharge as a case of the multiscale skeleton: its parameters, what the
+/// consolidation gave, and what its records need.
 #[derive(Debug, Clone)]
-pub struct SiloModel {
-    /// Points with their RVEs.
-    pub state: MpmState<RvePoint>,
-    /// Running sums.
-    pub totals: SiloTotals,
+pub struct Silo {
     /// The parameters.
     pub test: SiloTest,
     /// What the consolidation gave.
-    pub packing: ColumnPacking,
-    settle_mpm: Mpm,
-    discharge_mpm: Mpm,
-    material: RveMaterial,
+    pub packing: PackingReport,
     /// The silo's wall segments (sides and hopper), for the penetration measure.
     segments: Vec<RigidWall>,
     /// Index of the plate among the discharge walls (forced).
@@ -386,18 +382,31 @@ pub struct SiloModel {
     tracked: [usize; 2],
 }
 
-impl SiloModel {
+/// The silo as a coupled model: two loading phases, settling (gate closed) and the discharge
+/// (gate open, the plate of a forced discharge), one material.
+pub type SiloModel = MultiscaleModel<Silo>;
+
+/// The phase while settling.
+const SETTLE: usize = 0;
+/// The phase after the gate opened.
+const DISCHARGE: usize = 1;
+
+impl MultiscaleModel<Silo> {
     /// Builds the silo: consolidates the template packing, lays out the grid, the points
     /// and the walls.
     pub fn new(t: &SiloTest) -> Result<Self, MultiscaleError> {
         t.validate()?;
         let (rve, packing, report) = consolidated_packing(
             &t.rve,
-            t.seed,
-            t.disks,
-            [t.consolidation_stress, t.consolidation_friction],
-            t.friction,
-            t.conductivity,
+            &PackingProtocol {
+                seed: t.seed,
+                disks: t.disks,
+                stress: t.consolidation_stress,
+                consolidation_friction: t.consolidation_friction,
+                friction: t.friction,
+                conductivity: t.conductivity,
+                bonds: None,
+            },
         )?;
         Self::with_packing(t, rve, packing, report)
     }
@@ -407,7 +416,7 @@ impl SiloModel {
         t: &SiloTest,
         rve: RveParams,
         packing: RveState,
-        report: ColumnPacking,
+        report: PackingReport,
     ) -> Result<Self, MultiscaleError> {
         t.validate()?;
         let h = t.cell_size;
@@ -509,18 +518,24 @@ impl SiloModel {
             nearest([0.5 * w, y0 + 0.1]),
         ];
         let state = material.state(points);
-        Ok(Self {
-            state,
-            totals: SiloTotals::default(),
+        let case = Silo {
             test: *t,
             packing: report,
-            settle_mpm: Mpm::new(settle_config),
-            discharge_mpm: Mpm::new(discharge_config),
-            material,
             segments,
             plate_wall,
             tracked,
-        })
+        };
+        let phases = vec![
+            LoadingPhase {
+                mpm: Mpm::new(settle_config),
+                material: 0,
+            },
+            LoadingPhase {
+                mpm: Mpm::new(discharge_config),
+                material: 0,
+            },
+        ];
+        Self::from_parts(case, state, phases, vec![material])
     }
 
     /// Number of material points.
@@ -530,50 +545,12 @@ impl SiloModel {
 
     /// The tracked points A and B.
     pub fn tracked(&self) -> [usize; 2] {
-        self.tracked
-    }
-
-    /// Spreads the RVE stage over the processes of `d` (see [`super::distributed`]).
-    pub fn distribute(&mut self, d: &SharedDistribution) {
-        self.material.distribute(std::sync::Arc::clone(d));
-    }
-
-    /// Brings every process's RVEs up to date (a no-op without a distribution).
-    pub fn synchronise(&mut self) -> Result<(), MultiscaleError> {
-        match self.material.distribution() {
-            Some(d) => distributed::lock(d).synchronise(&mut self.state.material),
-            None => Ok(()),
-        }
-    }
-
-    /// Restores a saved state and running sums.
-    pub fn restore(
-        &mut self,
-        state: MpmState<RvePoint>,
-        totals: SiloTotals,
-    ) -> Result<(), MultiscaleError> {
-        if state.points.len() != self.state.points.len() {
-            return Err(thm_mpm::MpmError::MaterialStateCount {
-                states: state.points.len(),
-                points: self.state.points.len(),
-            }
-            .into());
-        }
-        self.state = state;
-        self.totals = totals;
-        Ok(())
+        self.case.tracked
     }
 
     /// Stored heat `Σ m c (T − T₀)` of `state` (J/m).
     pub fn stored_heat_of(&self, state: &MpmState<RvePoint>) -> f64 {
-        let pts = &state.points;
-        let t0 = self.test.initial_temperature;
-        pts.mass
-            .iter()
-            .zip(&pts.specific_heat)
-            .zip(&pts.temperature)
-            .map(|((m, c), t)| m * c * (t - t0))
-            .sum()
+        stored_heat(state, self.case.test.initial_temperature)
     }
 
     /// Deepest penetration of a point centre behind one of the silo's walls (m): the
@@ -581,7 +558,7 @@ impl SiloModel {
     fn penetration(&self) -> f64 {
         let mut deepest = 0.0f64;
         for x in &self.state.points.position {
-            for w in &self.segments {
+            for w in &self.case.segments {
                 if w.acts_on(*x, 0.0) {
                     deepest = deepest.max(-w.distance(*x, 0.0));
                 }
@@ -597,8 +574,8 @@ impl SiloModel {
             .position
             .iter()
             .filter(|x| {
-                x[1] > self.test.outlet_height
-                    && self.segments.iter().any(|w| {
+                x[1] > self.case.test.outlet_height
+                    && self.case.segments.iter().any(|w| {
                         let s = w.along(**x, 0.0);
                         let [lo, hi] = w.extent.unwrap_or([f64::NEG_INFINITY, f64::INFINITY]);
                         let band = w.depth.unwrap_or(f64::INFINITY);
@@ -607,73 +584,64 @@ impl SiloModel {
             })
             .count()
     }
+}
 
-    /// One coupled step: the gate opens when the settling is over; the MPM×DEM step; the
-    /// heat sums.
-    pub fn step(&mut self) -> Result<(), MultiscaleError> {
-        if !self.totals.released && self.state.step >= self.test.settle_steps() {
-            self.totals.released = true;
+impl Protocol for Silo {
+    type Totals = SiloTotals;
+    type Record = SiloRecord;
+    type StepStart = HeatBefore;
+
+    fn time_step(&self) -> f64 {
+        self.test.time_step
+    }
+
+    fn steps(&self) -> u64 {
+        self.test.steps()
+    }
+
+    fn phase(totals: &SiloTotals) -> usize {
+        if totals.released { DISCHARGE } else { SETTLE }
+    }
+
+    /// The gate opens when the settling is over; the heat before the step.
+    fn before_step(model: &mut SiloModel) -> Result<HeatBefore, MultiscaleError> {
+        if !model.totals.released && model.state.step >= model.case.test.settle_steps() {
+            model.totals.released = true;
         }
-        reduce_cells(&mut self.state)?;
-        let dt = self.test.time_step;
-        let pts = &mut self.state.points;
-        if !self.test.friction_heat {
-            pts.heat_source.fill(0.0);
-        }
-        let source: f64 = pts
-            .heat_source
-            .iter()
-            .zip(&pts.volume)
-            .map(|(q, v)| q * v * dt)
-            .sum();
-        let stored_before = self.stored_heat_of(&self.state);
-        if self.totals.released {
-            self.discharge_mpm
-                .step_batch(&mut self.state, &mut self.material, dt)?;
-        } else {
-            self.settle_mpm
-                .step_batch(&mut self.state, &mut self.material, dt)?;
-        }
-        self.totals.source_heat += source;
-        let stored_after = self.stored_heat_of(&self.state);
-        self.totals.heat_scale += source.abs() + (stored_after - stored_before).abs();
-        self.totals.deepest_penetration = self.totals.deepest_penetration.max(self.penetration());
+        let t = &model.case.test;
+        flow_step_start(
+            &mut model.state,
+            t.friction_heat,
+            t.time_step,
+            t.initial_temperature,
+        )
+    }
+
+    /// The heat sums and the deepest penetration behind a wall.
+    fn after_step(
+        model: &mut SiloModel,
+        _phase: usize,
+        before: HeatBefore,
+    ) -> Result<(), MultiscaleError> {
+        model.totals.source_heat += before.source;
+        let stored_after = model.stored_heat_of(&model.state);
+        model.totals.heat_scale += before.source.abs() + (stored_after - before.stored).abs();
+        model.totals.deepest_penetration =
+            model.totals.deepest_penetration.max(model.penetration());
         Ok(())
     }
 
-    /// The smallest time-step limit of B-Eqs. 30–31 over the points of the current state
-    /// (s), with the RVEs' wave moduli.
-    pub fn time_step_limit(&self) -> f64 {
-        use thm_mpm::BatchConstitutive;
-        self.settle_mpm
-            .time_step_limits_with(&self.state.points, |i| {
-                self.material.wave_modulus(&self.state.material[i])
-            })
-            .min()
-    }
-
-    /// Whether the run is over.
-    pub fn finished(&self) -> bool {
-        self.state.step >= self.test.steps()
-    }
-
-    /// The history row of the current state.
-    pub fn record(&self) -> SiloRecord {
-        self.record_of(&self.state, &self.totals)
-    }
-
-    /// The history row of `state` with running sums `totals` (the plate force is the last
-    /// step's).
-    pub fn record_of(&self, state: &MpmState<RvePoint>, totals: &SiloTotals) -> SiloRecord {
+    /// The history row (the plate force is the last step's).
+    fn record(model: &SiloModel, state: &MpmState<RvePoint>, totals: &SiloTotals) -> SiloRecord {
         let pts = &state.points;
-        let t0 = self.test.initial_temperature;
+        let t0 = model.case.test.initial_temperature;
         let (mut below, mut mass, mut ek, mut rise) = (0.0, 0.0, 0.0, 0.0);
         let (mut max_rise, mut hottest) = (f64::NEG_INFINITY, [0.0; 2]);
         for p in 0..pts.len() {
             let m = pts.mass[p];
             let [x, v] = [pts.position[p], pts.velocity[p]];
             mass += m;
-            if x[1] < self.test.outlet_height {
+            if x[1] < model.case.test.outlet_height {
                 below += m;
             }
             ek += 0.5 * m * (v[0] * v[0] + v[1] * v[1]);
@@ -684,15 +652,15 @@ impl SiloModel {
                 hottest = x;
             }
         }
-        let stored = self.stored_heat_of(state);
+        let stored = model.stored_heat_of(state);
         let residual = if totals.heat_scale > 0.0 {
             (stored - totals.source_heat) / totals.heat_scale
         } else {
             0.0
         };
-        let plate_force = match (self.plate_wall, totals.released) {
-            (Some(k), true) => self
-                .discharge_mpm
+        let plate_force = match (model.case.plate_wall, totals.released) {
+            (Some(k), true) => model.phases[DISCHARGE]
+                .mpm
                 .wall_reactions()
                 .get(k)
                 .map_or(0.0, |f| f[1]),
@@ -700,7 +668,8 @@ impl SiloModel {
         };
         SiloRecord {
             time: state.time,
-            time_after_release: state.time - self.test.settle_steps() as f64 * self.test.time_step,
+            time_after_release: state.time
+                - model.case.test.settle_steps() as f64 * model.case.test.time_step,
             discharged_fraction: below / mass,
             kinetic_energy: ek,
             mean_rise: rise / mass,
@@ -710,10 +679,10 @@ impl SiloModel {
             source_heat: totals.source_heat,
             heat_balance_residual: residual,
             plate_force,
-            escaped: self.escaped_of(state),
+            escaped: model.escaped_of(state),
             deepest_penetration: totals.deepest_penetration,
-            point_a: pts.position[self.tracked[0]],
-            point_b: pts.position[self.tracked[1]],
+            point_a: pts.position[model.case.tracked[0]],
+            point_b: pts.position[model.case.tracked[1]],
         }
     }
 }

@@ -240,7 +240,7 @@ fn full_case() -> Result<CaseOutput, CaseError> {
                 f64::NAN,
             ));
             dt_max = dt_max.max(r.max_temperature_rise);
-            let rho_c = run.model.packing.bulk_density * t.specific_heat;
+            let rho_c = run.model.case.packing.bulk_density * t.specific_heat;
             out.rows.push(Row::reported(
                 format!("{name}: mean temperature rise if all plate work became heat, W/(ρ c A0)"),
                 "K",
@@ -272,7 +272,7 @@ fn full_case() -> Result<CaseOutput, CaseError> {
         out.rows.push(Row::reported(
             format!("{name}: consolidated void ratio vs the paper's (400 disks)"),
             "-",
-            run.model.packing.void_ratio,
+            run.model.case.packing.void_ratio,
             c.paper_void_ratio(),
         ));
         out.notes.push(format!(
@@ -482,7 +482,7 @@ fn bonded_full_case() -> Result<CaseOutput, CaseError> {
                 out.rows.push(Row::reported(
                     format!("{name}: consolidated void ratio vs the paper's (400 disks)"),
                     "-",
-                    run.model.packing.void_ratio,
+                    run.model.case.packing.void_ratio,
                     paper,
                 ));
             }

@@ -101,7 +101,7 @@ pub fn run_silo(t: &SiloTest) -> Result<SiloRun, CaseError> {
 
 fn rows(name: &str, run: &SiloRun, out: &mut CaseOutput) -> Result<(), CaseError> {
     let last = run.last()?;
-    let h = run.model.test.cell_size;
+    let h = run.model.case.test.cell_size;
     out.rows.push(Row::at_most(
         format!("{name}: largest |stored - friction heat| / Σ|per-step heat|"),
         "-",
@@ -130,7 +130,7 @@ fn rows(name: &str, run: &SiloRun, out: &mut CaseOutput) -> Result<(), CaseError
     out.rows.push(Row::reported(
         format!("{name}: height of the hottest point above the opening at the end"),
         "m",
-        last.hottest[1] - run.model.test.outlet_height,
+        last.hottest[1] - run.model.case.test.outlet_height,
         f64::NAN,
     ));
     out.rows.push(Row::reported(
@@ -218,7 +218,7 @@ fn case(free: SiloTest, forced: SiloTest) -> Result<CaseOutput, CaseError> {
     out.notes.push(format!(
         "{} points per silo, {} disks per RVE; free run {:.1} s, forced run {:.1} s of wall time",
         a.model.points(),
-        a.model.test.disks,
+        a.model.case.test.disks,
         a.wall,
         b.wall
     ));

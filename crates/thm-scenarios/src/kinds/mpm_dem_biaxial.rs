@@ -14,18 +14,19 @@
 //! (grid, plates, consolidated template) is rebuilt from the parameters on resume.
 
 use serde::{Deserialize, Serialize};
-use thm_coupling::multiscale::biaxial::{BiaxialModel, BiaxialTest, BiaxialTotals, Compaction};
-use thm_coupling::multiscale::distributed::SharedDistribution;
-use thm_coupling::multiscale::{RvePoint, biaxial::BiaxialRecord};
+use thm_coupling::multiscale::RvePoint;
+use thm_coupling::multiscale::biaxial::{
+    Biaxial, BiaxialModel, BiaxialRecord, BiaxialTest, BiaxialTotals, Compaction,
+};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
-use thm_mpm::{BatchConstitutive, MpmState};
+use thm_mpm::MpmState;
 
-use crate::config::TimeControl;
-use crate::config::check_range;
-use crate::error::{ConfigError, RunError};
+use super::multiscale::{Multiscale, MultiscaleKind, check_time_step, kind_state};
+use crate::config::{TimeControl, check_range};
+use crate::error::ConfigError;
 use crate::profiles::Profile;
-use crate::rve_frames::RveFrames;
-use crate::scenario::{FrameSink, Scenario};
+use crate::rve_frames::{PointRveFields, RveFrames};
+use crate::scenario::FrameSink;
 use crate::summary::SummaryRow;
 use crate::units::{Pressure, Quantity, Temperature, Velocity};
 
@@ -84,25 +85,22 @@ pub struct Params {
     pub biaxial: BiaxialParams,
 }
 
-/// What a checkpoint holds.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct State {
-    /// Points with their RVEs.
-    pub mpm: MpmState<RvePoint>,
-    /// Running sums (heat, friction work, plate work).
-    pub totals: BiaxialTotals,
-    /// `(axial strain, plate stress)` every [`SAMPLE_EVERY`] steps.
-    pub stress_strain: Vec<[f64; 2]>,
+kind_state! {
+    /// What a checkpoint holds.
+    State for Biaxial {
+        /// `(axial strain, plate stress)` every [`SAMPLE_EVERY`](super::multiscale::SAMPLE_EVERY)
+        /// steps.
+        stress_strain: Vec<[f64; 2]>
+    }
 }
 
-/// Steps between stress–strain samples.
-pub const SAMPLE_EVERY: u64 = 10;
+/// The kind: the biaxial test on the multiscale skeleton.
+pub type MpmDemBiaxial = Multiscale<BiaxialOutputs>;
 
-/// The stepper: the model (its `state` is swapped in for each step) and frame scratch.
+/// What the kind keeps for its outputs: frame scratch, the tracked points, the bonds
+/// installed.
 #[derive(Debug)]
-pub struct MpmDemBiaxial {
-    model: BiaxialModel,
+pub struct BiaxialOutputs {
     rise: Vec<f64>,
     sxx: Vec<f64>,
     syy: Vec<f64>,
@@ -113,24 +111,7 @@ pub struct MpmDemBiaxial {
     /// Bonds installed in all RVEs after the consolidation.
     bonds_installed: usize,
     rve_frames: RveFrames,
-    rve_fields: crate::rve_frames::PointRveFields,
-}
-
-impl MpmDemBiaxial {
-    /// Runs `f` on the model with `state` swapped in.
-    fn with_state<R>(&mut self, state: &mut State, f: impl FnOnce(&mut BiaxialModel) -> R) -> R {
-        std::mem::swap(&mut self.model.state, &mut state.mpm);
-        std::mem::swap(&mut self.model.totals, &mut state.totals);
-        let r = f(&mut self.model);
-        std::mem::swap(&mut self.model.state, &mut state.mpm);
-        std::mem::swap(&mut self.model.totals, &mut state.totals);
-        r
-    }
-
-    /// The history row of `state` (the plate reaction is the stepper's last step's).
-    fn record(&self, state: &State) -> BiaxialRecord {
-        self.model.record_of(&state.mpm, &state.totals)
-    }
+    rve_fields: PointRveFields,
 }
 
 /// Intact bonds over all RVEs.
@@ -138,33 +119,15 @@ fn intact_bonds(mpm: &MpmState<RvePoint>) -> usize {
     mpm.material.iter().map(|p| p.intact_bonds as usize).sum()
 }
 
-impl Scenario for MpmDemBiaxial {
+impl MultiscaleKind for BiaxialOutputs {
     const KIND: &'static str = "mpm_dem_biaxial";
     // 2: RvePoint carries its intact bond count.
     const STATE_VERSION: u32 = 2;
     type Params = Params;
+    type Case = Biaxial;
     type State = State;
 
-    fn distribute(&mut self, distribution: &SharedDistribution) -> Result<(), RunError> {
-        self.model.distribute(distribution);
-        Ok(())
-    }
-
-    fn synchronise(&mut self, state: &mut State) -> Result<(), RunError> {
-        let (step, time) = (state.mpm.step, state.mpm.time);
-        self.with_state(state, |m| m.synchronise())
-            .map_err(crate::error::physics_error(step, time))
-    }
-
-    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::arrays::StateArray<'s>> {
-        crate::arrays::mpm_rve_arrays(&state.mpm.points, &state.mpm.material)
-    }
-
-    fn set_array(&mut self, state: &mut State, name: &str, values: &[f64]) -> Result<(), RunError> {
-        crate::arrays::set_points_array(&mut state.mpm.points, name, values)
-    }
-
-    fn init(p: &Params, time: &TimeControl) -> Result<(Self, State), ConfigError> {
+    fn init(p: &Params, time: &TimeControl) -> Result<(BiaxialModel, Self), ConfigError> {
         let b = &p.biaxial;
         for (k, v) in b.cells.iter().enumerate() {
             if !(1..=1000).contains(v) {
@@ -235,22 +198,7 @@ impl Scenario for MpmDemBiaxial {
         t.target_strain = (travel / t.height).max(1e-6);
         let model =
             BiaxialModel::new(&t).map_err(|e| ConfigError::new("biaxial", e.to_string()))?;
-        let material = &model.material;
-        let limit = model
-            .mpm
-            .time_step_limits_with(&model.state.points, |i| {
-                material.wave_modulus(&model.state.material[i])
-            })
-            .min();
-        if time.dt > limit {
-            return Err(ConfigError::new(
-                "time.step",
-                format!(
-                    "must be ≤ {limit:e} s (B-Eqs. 30–31 stability limit), got {} s",
-                    time.dt
-                ),
-            ));
-        }
+        check_time_step(&model, time)?;
         if b.track.len() > 16 {
             return Err(ConfigError::new(
                 "biaxial.track",
@@ -282,52 +230,26 @@ impl Scenario for MpmDemBiaxial {
         }
         let n = model.state.points.len();
         let bonds_installed = intact_bonds(&model.state);
-        let state = State {
-            mpm: model.state.clone(),
-            totals: model.totals,
-            stress_strain: vec![[0.0, t.confining_stress]],
+        let outputs = Self {
+            rise: vec![0.0; n],
+            sxx: vec![0.0; n],
+            syy: vec![0.0; n],
+            deviatoric: vec![0.0; n],
+            kinetic: vec![0.0; n],
+            tracked,
+            bonds_installed,
+            rve_frames: RveFrames::default(),
+            rve_fields: PointRveFields::default(),
         };
-        Ok((
-            Self {
-                model,
-                rise: vec![0.0; n],
-                sxx: vec![0.0; n],
-                syy: vec![0.0; n],
-                deviatoric: vec![0.0; n],
-                kinetic: vec![0.0; n],
-                tracked,
-                bonds_installed,
-                rve_frames: RveFrames::default(),
-                rve_fields: Default::default(),
-            },
-            state,
-        ))
+        Ok((model, outputs))
     }
 
-    fn restore(&mut self, state: &State) -> Result<(), RunError> {
-        let (mpm, totals) = (state.mpm.clone(), state.totals);
-        self.model
-            .restore(mpm, totals)
-            .map_err(|e| RunError::Physics {
-                step: state.mpm.step,
-                time: state.mpm.time,
-                message: e.to_string(),
-            })
+    fn first_samples(model: &BiaxialModel) -> Vec<[f64; 2]> {
+        vec![[0.0, model.case.test.confining_stress]]
     }
 
-    fn step(&mut self, state: &mut State, step: u64, _dt: f64) -> Result<(), RunError> {
-        let time = state.mpm.time;
-        self.with_state(state, |m| m.step())
-            .map_err(|e| RunError::Physics {
-                step,
-                time,
-                message: e.to_string(),
-            })?;
-        if state.mpm.step.is_multiple_of(SAMPLE_EVERY) {
-            let r = self.record(state);
-            state.stress_strain.push([r.axial_strain, r.plate_stress]);
-        }
-        Ok(())
+    fn sample(r: &BiaxialRecord, _totals: &BiaxialTotals) -> Option<[f64; 2]> {
+        Some([r.axial_strain, r.plate_stress])
     }
 
     fn monitor_columns(&self) -> Vec<Column> {
@@ -352,8 +274,7 @@ impl Scenario for MpmDemBiaxial {
         ]
     }
 
-    fn monitor(&self, state: &State, values: &mut Vec<f64>) {
-        let r = self.record(state);
+    fn monitor(&self, r: &BiaxialRecord, state: &State, values: &mut Vec<f64>) {
         values.extend([
             r.axial_strain,
             r.stress_ratio,
@@ -375,9 +296,14 @@ impl Scenario for MpmDemBiaxial {
         ]);
     }
 
-    fn frame(&mut self, state: &State, sink: &mut FrameSink<'_>) -> Result<(), IoError> {
+    fn frame(
+        &mut self,
+        model: &BiaxialModel,
+        state: &State,
+        sink: &mut FrameSink<'_>,
+    ) -> Result<(), IoError> {
         let p = &state.mpm.points;
-        let t0 = self.model.test.initial_temperature;
+        let t0 = model.case.test.initial_temperature;
         for k in 0..p.len() {
             self.rise[k] = p.temperature[k] - t0;
             self.sxx[k] = -p.stress[k][0];
@@ -415,7 +341,7 @@ impl Scenario for MpmDemBiaxial {
         Ok(())
     }
 
-    fn profiles(&self, state: &State, _time: f64) -> Vec<Profile> {
+    fn profiles(&self, state: &State) -> Vec<Profile> {
         let (x, y) = state.stress_strain.iter().map(|s| (s[0], s[1])).unzip();
         vec![Profile {
             name: "stress_strain".into(),
@@ -427,9 +353,8 @@ impl Scenario for MpmDemBiaxial {
         }]
     }
 
-    fn summary(&self, state: &State, _time: f64) -> Vec<SummaryRow> {
-        let r = self.record(state);
-        let sc = self.model.test.confining_stress;
+    fn summary(&self, model: &BiaxialModel, r: &BiaxialRecord, state: &State) -> Vec<SummaryRow> {
+        let sc = model.case.test.confining_stress;
         let ratio = |s: f64| (s - sc) / (s + sc);
         let peak = state
             .stress_strain
@@ -454,7 +379,7 @@ impl Scenario for MpmDemBiaxial {
                 "axial_strain (reference: the target of time.end)",
                 "-",
                 r.axial_strain,
-                Some(self.model.test.target_strain),
+                Some(model.case.test.target_strain),
             ),
             row("peak_stress_ratio_plate", "-", peak, None),
             row(
@@ -490,8 +415,8 @@ impl Scenario for MpmDemBiaxial {
             row(
                 "consolidated void ratio (reference: the paper's)",
                 "-",
-                self.model.packing.void_ratio,
-                self.model.test.paper_void_ratio(),
+                model.case.packing.void_ratio,
+                model.case.test.paper_void_ratio(),
             ),
         ]
     }

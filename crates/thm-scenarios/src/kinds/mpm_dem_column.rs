@@ -15,17 +15,17 @@
 //! plates, consolidated template) are rebuilt from the parameters on resume.
 
 use serde::{Deserialize, Serialize};
-use thm_coupling::multiscale::RvePoint;
-use thm_coupling::multiscale::column::{ColumnModel, ColumnRecord, ColumnTest, ColumnTotals};
-use thm_coupling::multiscale::distributed::SharedDistribution;
+use thm_coupling::multiscale::column::{
+    Column as ColumnCase, ColumnModel, ColumnRecord, ColumnTest, ColumnTotals,
+};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
-use thm_mpm::MpmState;
 
-use crate::config::TimeControl;
-use crate::config::{check_count, check_range};
-use crate::error::{ConfigError, RunError};
+use super::multiscale::{Multiscale, MultiscaleKind, check_time_step, kind_state};
+use crate::config::{TimeControl, check_count, check_range};
+use crate::error::ConfigError;
 use crate::profiles::Profile;
-use crate::scenario::{FrameSink, Scenario};
+use crate::rve_frames::PointRveFields;
+use crate::scenario::FrameSink;
 use crate::summary::SummaryRow;
 use crate::units::{Quantity, Temperature, Time};
 
@@ -77,75 +77,36 @@ pub struct Params {
     pub column: ColumnParams,
 }
 
-/// What a checkpoint holds.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct State {
-    /// Points with their RVEs.
-    pub mpm: MpmState<RvePoint>,
-    /// Running sums and the state at the release.
-    pub totals: ColumnTotals,
-    /// `(time after release, E_p/E_p0, E_k/E_p0)` every [`SAMPLE_EVERY`] steps after the
-    /// release.
-    pub energies: Vec<[f64; 3]>,
+kind_state! {
+    /// What a checkpoint holds.
+    State for ColumnCase {
+        /// `(time after release, E_p/E_p0, E_k/E_p0)` every
+        /// [`SAMPLE_EVERY`](super::multiscale::SAMPLE_EVERY) steps after the release.
+        energies: Vec<[f64; 3]>
+    }
 }
 
-/// Steps between energy samples.
-pub const SAMPLE_EVERY: u64 = 10;
+/// The kind: the column collapse on the multiscale skeleton.
+pub type MpmDemColumn = Multiscale<ColumnOutputs>;
 
-/// The stepper: the model (its `state` is swapped in for each step) and frame scratch.
+/// What the kind keeps for its outputs: frame scratch.
 #[derive(Debug)]
-pub struct MpmDemColumn {
-    model: ColumnModel,
+pub struct ColumnOutputs {
     rise: Vec<f64>,
     pressure: Vec<f64>,
     bonds: Vec<f64>,
-    rve_fields: crate::rve_frames::PointRveFields,
+    rve_fields: PointRveFields,
 }
 
-impl MpmDemColumn {
-    /// Runs `f` on the model with `state` swapped in.
-    fn with_state<R>(&mut self, state: &mut State, f: impl FnOnce(&mut ColumnModel) -> R) -> R {
-        std::mem::swap(&mut self.model.state, &mut state.mpm);
-        std::mem::swap(&mut self.model.totals, &mut state.totals);
-        let r = f(&mut self.model);
-        std::mem::swap(&mut self.model.state, &mut state.mpm);
-        std::mem::swap(&mut self.model.totals, &mut state.totals);
-        r
-    }
-
-    fn record(&self, state: &State) -> ColumnRecord {
-        self.model.record_of(&state.mpm, &state.totals)
-    }
-}
-
-impl Scenario for MpmDemColumn {
+impl MultiscaleKind for ColumnOutputs {
     const KIND: &'static str = "mpm_dem_column";
     // 2: RvePoint carries its intact bond count.
     const STATE_VERSION: u32 = 2;
     type Params = Params;
+    type Case = ColumnCase;
     type State = State;
 
-    fn distribute(&mut self, distribution: &SharedDistribution) -> Result<(), RunError> {
-        self.model.distribute(distribution);
-        Ok(())
-    }
-
-    fn synchronise(&mut self, state: &mut State) -> Result<(), RunError> {
-        let (step, time) = (state.mpm.step, state.mpm.time);
-        self.with_state(state, |m| m.synchronise())
-            .map_err(crate::error::physics_error(step, time))
-    }
-
-    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::arrays::StateArray<'s>> {
-        crate::arrays::mpm_rve_arrays(&state.mpm.points, &state.mpm.material)
-    }
-
-    fn set_array(&mut self, state: &mut State, name: &str, values: &[f64]) -> Result<(), RunError> {
-        crate::arrays::set_points_array(&mut state.mpm.points, name, values)
-    }
-
-    fn init(p: &Params, time: &TimeControl) -> Result<(Self, State), ConfigError> {
+    fn init(p: &Params, time: &TimeControl) -> Result<(ColumnModel, Self), ConfigError> {
         let c = &p.column;
         check_range("column.bond_strength", c.bond_strength, 0.0, 10.0)?;
         check_range("column.melting_threshold", c.melting_threshold, 1e-9, 1e4)?;
@@ -194,59 +155,25 @@ impl Scenario for MpmDemColumn {
         }
         t.collapse_time = (time.n_steps - settle_steps) as f64 * time.dt;
         let model = ColumnModel::new(&t).map_err(|e| ConfigError::new("column", e.to_string()))?;
-        let limit = model.time_step_limit();
-        if time.dt > limit {
-            return Err(ConfigError::new(
-                "time.step",
-                format!(
-                    "must be ≤ {limit:e} s (B-Eqs. 30–31 stability limit), got {} s",
-                    time.dt
-                ),
-            ));
-        }
+        check_time_step(&model, time)?;
         let n = model.state.points.len();
-        let state = State {
-            mpm: model.state.clone(),
-            totals: model.totals,
-            energies: Vec::new(),
+        let outputs = Self {
+            rise: vec![0.0; n],
+            pressure: vec![0.0; n],
+            bonds: vec![0.0; n],
+            rve_fields: PointRveFields::default(),
         };
-        Ok((
-            Self {
-                model,
-                rise: vec![0.0; n],
-                pressure: vec![0.0; n],
-                bonds: vec![0.0; n],
-                rve_fields: Default::default(),
-            },
-            state,
-        ))
+        Ok((model, outputs))
     }
 
-    fn restore(&mut self, state: &State) -> Result<(), RunError> {
-        self.model
-            .restore(state.mpm.clone(), state.totals)
-            .map_err(|e| RunError::Physics {
-                step: state.mpm.step,
-                time: state.mpm.time,
-                message: e.to_string(),
-            })
+    fn first_samples(_model: &ColumnModel) -> Vec<[f64; 3]> {
+        Vec::new()
     }
 
-    fn step(&mut self, state: &mut State, step: u64, _dt: f64) -> Result<(), RunError> {
-        let time = state.mpm.time;
-        self.with_state(state, |m| m.step())
-            .map_err(|e| RunError::Physics {
-                step,
-                time,
-                message: e.to_string(),
-            })?;
-        if state.totals.released && state.mpm.step.is_multiple_of(SAMPLE_EVERY) {
-            let r = self.record(state);
-            state
-                .energies
-                .push([r.time_after_release, r.potential_ratio, r.kinetic_ratio]);
-        }
-        Ok(())
+    fn sample(r: &ColumnRecord, totals: &ColumnTotals) -> Option<[f64; 3]> {
+        totals
+            .released
+            .then_some([r.time_after_release, r.potential_ratio, r.kinetic_ratio])
     }
 
     fn monitor_columns(&self) -> Vec<Column> {
@@ -271,8 +198,7 @@ impl Scenario for MpmDemColumn {
         ]
     }
 
-    fn monitor(&self, state: &State, values: &mut Vec<f64>) {
-        let r = self.record(state);
+    fn monitor(&self, r: &ColumnRecord, _state: &State, values: &mut Vec<f64>) {
         values.extend([
             r.time_after_release,
             r.potential_ratio,
@@ -294,9 +220,14 @@ impl Scenario for MpmDemColumn {
         ]);
     }
 
-    fn frame(&mut self, state: &State, sink: &mut FrameSink<'_>) -> Result<(), IoError> {
+    fn frame(
+        &mut self,
+        model: &ColumnModel,
+        state: &State,
+        sink: &mut FrameSink<'_>,
+    ) -> Result<(), IoError> {
         let p = &state.mpm.points;
-        let t0 = self.model.test.initial_temperature;
+        let t0 = model.case.test.initial_temperature;
         for k in 0..p.len() {
             self.rise[k] = p.temperature[k] - t0;
             self.pressure[k] = -0.5 * (p.stress[k][0] + p.stress[k][1]);
@@ -317,7 +248,7 @@ impl Scenario for MpmDemColumn {
         sink("material_points", &self.rve_fields.add_to(grid))
     }
 
-    fn profiles(&self, state: &State, _time: f64) -> Vec<Profile> {
+    fn profiles(&self, state: &State) -> Vec<Profile> {
         let x: Vec<f64> = state.energies.iter().map(|s| s[0]).collect();
         vec![
             Profile {
@@ -339,8 +270,7 @@ impl Scenario for MpmDemColumn {
         ]
     }
 
-    fn summary(&self, state: &State, _time: f64) -> Vec<SummaryRow> {
-        let r = self.record(state);
+    fn summary(&self, model: &ColumnModel, r: &ColumnRecord, state: &State) -> Vec<SummaryRow> {
         let peak = state.energies.iter().fold(0.0_f64, |m, s| m.max(s[2]));
         let failure = state
             .energies
@@ -353,7 +283,7 @@ impl Scenario for MpmDemColumn {
             measured,
             reference,
         };
-        let t = &self.model.test;
+        let t = &model.case.test;
         let paper_failure = if t.bond_strength >= 0.1 && t.melting {
             Some(15.0)
         } else {
@@ -395,7 +325,7 @@ impl Scenario for MpmDemColumn {
             row(
                 "consolidated void ratio (reference: the paper's at 10 kPa)",
                 "-",
-                self.model.packing.void_ratio,
+                model.case.packing.void_ratio,
                 Some(0.251),
             ),
         ]

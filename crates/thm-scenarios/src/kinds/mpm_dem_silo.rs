@@ -17,18 +17,15 @@
 //! sums and the discharge samples.
 
 use serde::{Deserialize, Serialize};
-use thm_coupling::multiscale::RvePoint;
-use thm_coupling::multiscale::distributed::SharedDistribution;
-use thm_coupling::multiscale::silo::{SiloModel, SiloRecord, SiloTest, SiloTotals};
+use thm_coupling::multiscale::silo::{Silo, SiloModel, SiloRecord, SiloTest, SiloTotals};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
-use thm_mpm::MpmState;
 
-use crate::config::TimeControl;
-use crate::config::{check_count, check_range};
-use crate::error::{ConfigError, RunError};
+use super::multiscale::{Multiscale, MultiscaleKind, kind_state};
+use crate::config::{TimeControl, check_count, check_range};
+use crate::error::ConfigError;
 use crate::profiles::Profile;
 use crate::rve_frames::{PointRveFields, RveFrames};
-use crate::scenario::{FrameSink, Scenario};
+use crate::scenario::FrameSink;
 use crate::summary::SummaryRow;
 use crate::units::{Length, Quantity, Temperature, Time, Velocity};
 
@@ -70,74 +67,36 @@ pub struct Params {
     pub silo: SiloParams,
 }
 
-/// What a checkpoint holds.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct State {
-    /// Points with their RVEs.
-    pub mpm: MpmState<RvePoint>,
-    /// Running sums.
-    pub totals: SiloTotals,
-    /// `(time after release, discharged fraction, largest rise)` every [`SAMPLE_EVERY`]
-    /// steps after the release.
-    pub samples: Vec<[f64; 3]>,
+kind_state! {
+    /// What a checkpoint holds.
+    State for Silo {
+        /// `(time after release, discharged fraction, largest rise)` every
+        /// [`SAMPLE_EVERY`](super::multiscale::SAMPLE_EVERY) steps after the release.
+        samples: Vec<[f64; 3]>
+    }
 }
 
-/// Steps between discharge samples.
-pub const SAMPLE_EVERY: u64 = 10;
+/// The kind: the silo discharge on the multiscale skeleton.
+pub type MpmDemSilo = Multiscale<SiloOutputs>;
 
-/// The stepper: the model (its `state` is swapped in for each step) and frame scratch.
+/// What the kind keeps for its outputs: frame scratch.
 #[derive(Debug)]
-pub struct MpmDemSilo {
-    model: SiloModel,
+pub struct SiloOutputs {
     rise: Vec<f64>,
     pressure: Vec<f64>,
     rve_fields: PointRveFields,
     rve_frames: RveFrames,
 }
 
-impl MpmDemSilo {
-    fn with_state<R>(&mut self, state: &mut State, f: impl FnOnce(&mut SiloModel) -> R) -> R {
-        std::mem::swap(&mut self.model.state, &mut state.mpm);
-        std::mem::swap(&mut self.model.totals, &mut state.totals);
-        let r = f(&mut self.model);
-        std::mem::swap(&mut self.model.state, &mut state.mpm);
-        std::mem::swap(&mut self.model.totals, &mut state.totals);
-        r
-    }
-
-    fn record(&self, state: &State) -> SiloRecord {
-        self.model.record_of(&state.mpm, &state.totals)
-    }
-}
-
-impl Scenario for MpmDemSilo {
+impl MultiscaleKind for SiloOutputs {
     const KIND: &'static str = "mpm_dem_silo";
     // 2: RvePoint carries its intact bond count.
     const STATE_VERSION: u32 = 2;
     type Params = Params;
+    type Case = Silo;
     type State = State;
 
-    fn distribute(&mut self, distribution: &SharedDistribution) -> Result<(), RunError> {
-        self.model.distribute(distribution);
-        Ok(())
-    }
-
-    fn synchronise(&mut self, state: &mut State) -> Result<(), RunError> {
-        let (step, time) = (state.mpm.step, state.mpm.time);
-        self.with_state(state, |m| m.synchronise())
-            .map_err(crate::error::physics_error(step, time))
-    }
-
-    fn arrays<'s>(&'s self, state: &'s State) -> Vec<crate::arrays::StateArray<'s>> {
-        crate::arrays::mpm_rve_arrays(&state.mpm.points, &state.mpm.material)
-    }
-
-    fn set_array(&mut self, state: &mut State, name: &str, values: &[f64]) -> Result<(), RunError> {
-        crate::arrays::set_points_array(&mut state.mpm.points, name, values)
-    }
-
-    fn init(p: &Params, time: &TimeControl) -> Result<(Self, State), ConfigError> {
+    fn init(p: &Params, time: &TimeControl) -> Result<(SiloModel, Self), ConfigError> {
         let s = &p.silo;
         let h = s.cell_size.positive("silo.cell_size")?;
         check_range("silo.cell_size", h, 0.005, 0.2)?;
@@ -183,48 +142,23 @@ impl Scenario for MpmDemSilo {
         t.discharge_time = (time.n_steps - settle_steps) as f64 * time.dt;
         let model = SiloModel::new(&t).map_err(|e| ConfigError::new("silo", e.to_string()))?;
         let n = model.state.points.len();
-        let state = State {
-            mpm: model.state.clone(),
-            totals: model.totals,
-            samples: Vec::new(),
+        let outputs = Self {
+            rise: vec![0.0; n],
+            pressure: vec![0.0; n],
+            rve_fields: PointRveFields::default(),
+            rve_frames: RveFrames::default(),
         };
-        Ok((
-            Self {
-                model,
-                rise: vec![0.0; n],
-                pressure: vec![0.0; n],
-                rve_fields: PointRveFields::default(),
-                rve_frames: RveFrames::default(),
-            },
-            state,
-        ))
+        Ok((model, outputs))
     }
 
-    fn restore(&mut self, state: &State) -> Result<(), RunError> {
-        self.model
-            .restore(state.mpm.clone(), state.totals)
-            .map_err(|e| RunError::Physics {
-                step: state.mpm.step,
-                time: state.mpm.time,
-                message: e.to_string(),
-            })
+    fn first_samples(_model: &SiloModel) -> Vec<[f64; 3]> {
+        Vec::new()
     }
 
-    fn step(&mut self, state: &mut State, step: u64, _dt: f64) -> Result<(), RunError> {
-        let time = state.mpm.time;
-        self.with_state(state, |m| m.step())
-            .map_err(|e| RunError::Physics {
-                step,
-                time,
-                message: e.to_string(),
-            })?;
-        if state.totals.released && state.mpm.step.is_multiple_of(SAMPLE_EVERY) {
-            let r = self.record(state);
-            state
-                .samples
-                .push([r.time_after_release, r.discharged_fraction, r.max_rise]);
-        }
-        Ok(())
+    fn sample(r: &SiloRecord, totals: &SiloTotals) -> Option<[f64; 3]> {
+        totals
+            .released
+            .then_some([r.time_after_release, r.discharged_fraction, r.max_rise])
     }
 
     fn monitor_columns(&self) -> Vec<Column> {
@@ -249,8 +183,7 @@ impl Scenario for MpmDemSilo {
         ]
     }
 
-    fn monitor(&self, state: &State, values: &mut Vec<f64>) {
-        let r = self.record(state);
+    fn monitor(&self, r: &SiloRecord, _state: &State, values: &mut Vec<f64>) {
         values.extend([
             r.time_after_release,
             r.discharged_fraction,
@@ -272,9 +205,14 @@ impl Scenario for MpmDemSilo {
         ]);
     }
 
-    fn frame(&mut self, state: &State, sink: &mut FrameSink<'_>) -> Result<(), IoError> {
+    fn frame(
+        &mut self,
+        model: &SiloModel,
+        state: &State,
+        sink: &mut FrameSink<'_>,
+    ) -> Result<(), IoError> {
         let p = &state.mpm.points;
-        let t0 = self.model.test.initial_temperature;
+        let t0 = model.case.test.initial_temperature;
         for k in 0..p.len() {
             self.rise[k] = p.temperature[k] - t0;
             self.pressure[k] = -0.5 * (p.stress[k][0] + p.stress[k][1]);
@@ -289,7 +227,7 @@ impl Scenario for MpmDemSilo {
             .with_point_field("velocity [m/s]", FieldValues::Vector2(&p.velocity));
         self.rve_fields.fill(&p.strain, &state.mpm.material);
         sink("material_points", &self.rve_fields.add_to(grid))?;
-        for (k, &i) in self.model.tracked().iter().enumerate() {
+        for (k, &i) in model.tracked().iter().enumerate() {
             if let Some(point) = state.mpm.material.get(i) {
                 self.rve_frames
                     .write(&format!("rve_{k}"), &point.rve, sink)?;
@@ -298,7 +236,7 @@ impl Scenario for MpmDemSilo {
         Ok(())
     }
 
-    fn profiles(&self, state: &State, _time: f64) -> Vec<Profile> {
+    fn profiles(&self, state: &State) -> Vec<Profile> {
         let x: Vec<f64> = state.samples.iter().map(|s| s[0]).collect();
         vec![
             Profile {
@@ -320,8 +258,7 @@ impl Scenario for MpmDemSilo {
         ]
     }
 
-    fn summary(&self, state: &State, _time: f64) -> Vec<SummaryRow> {
-        let r = self.record(state);
+    fn summary(&self, model: &SiloModel, r: &SiloRecord, _state: &State) -> Vec<SummaryRow> {
         let row = |q: &str, unit: &str, measured: f64, reference: Option<f64>| SummaryRow {
             quantity: q.into(),
             unit: unit.into(),
@@ -334,7 +271,7 @@ impl Scenario for MpmDemSilo {
             row(
                 "height of the hottest point above the opening",
                 "m",
-                r.hottest[1] - self.model.test.outlet_height,
+                r.hottest[1] - model.case.test.outlet_height,
                 None,
             ),
             row("mean temperature rise", "K", r.mean_rise, None),
@@ -348,7 +285,7 @@ impl Scenario for MpmDemSilo {
             row(
                 "material points (the paper: 1088 at 0.05 m cells)",
                 "-",
-                self.model.points() as f64,
+                model.points() as f64,
                 None,
             ),
         ]
