@@ -15,7 +15,7 @@ mod verify;
 use std::process::ExitCode;
 
 fn usage() -> &'static str {
-    "usage:\n  cargo xtask verify [--quick] [--case NAME]... [--list] [--out DIR]\n  cargo xtask tidy\n"
+    "usage:\n  cargo xtask verify [--quick] [--case NAME]... [--list] [--out DIR]\n  cargo xtask tidy [ROOT]\n"
 }
 
 fn main() -> ExitCode {
@@ -29,7 +29,11 @@ fn main() -> ExitCode {
             }
         },
         Some("tidy") => {
-            let root = tidy::workspace_root();
+            // An optional workspace root (another checkout); this one by default.
+            let root = args
+                .get(1)
+                .map(std::path::PathBuf::from)
+                .unwrap_or_else(tidy::workspace_root);
             let problems = tidy::check(&root);
             if problems.is_empty() {
                 println!("tidy: ok");
