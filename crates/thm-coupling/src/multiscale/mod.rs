@@ -66,6 +66,17 @@
 //!    applied to the point's volume, so a point receives `Σ E_f · V_p / V_RVE` per step
 //!    (tested to round-off against the friction work summed over the RVEs).
 //!
+//! ## One skeleton for the cases with a changing load ([`model`])
+//!
+//! The biaxial test, the silo discharge and the column collapse run on one
+//! [`MultiscaleModel`]: the state, the running sums, the loading phases (an MPM stepper and the
+//! material its points are stepped with) and the RVE materials, and one coupled step. Each case
+//! is a [`Protocol`]: its constructor (grid, walls, points, template packing by
+//! [`model::consolidated_packing`]), what happens before a step (a release, loads that follow
+//! the boundary) and after it (heat, friction work, plate work), and the history row. The rod
+//! and the square, whose load does not change, step `thm-mpm` with an [`RveMaterial`] directly.
+//!
+//!
 //! ## The granular rod (B-Sect. 5.2.1, [`rod`])
 //!
 //! 50 points on a 1 m rod, each with a 20 × 20 square packing of r = 5 mm disks at 100 kPa,
