@@ -76,7 +76,6 @@
 //! the boundary) and after it (heat, friction work, plate work), and the history row. The rod
 //! and the square, whose load does not change, step `thm-mpm` with an [`RveMaterial`] directly.
 //!
-//!
 //! ## The granular rod (B-Sect. 5.2.1, [`rod`])
 //!
 //! 50 points on a 1 m rod, each with a 20 × 20 square packing of r = 5 mm disks at 100 kPa,
