@@ -20,7 +20,9 @@ use thm_coupling::multiscale::column::{
 };
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 
-use super::multiscale::{Multiscale, MultiscaleKind, check_time_step, kind_state};
+use super::multiscale::{
+    Multiscale, MultiscaleKind, check_time_step, kind_state, rise_and_pressure, time_after_settling,
+};
 use crate::config::{TimeControl, check_count, check_range};
 use crate::error::ConfigError;
 use crate::profiles::Profile;
@@ -143,17 +145,7 @@ impl MultiscaleKind for ColumnOutputs {
         t.initial_temperature = c.initial_temperature.si() - 273.15;
         t.plate_temperature = c.plate_temperature.si() - 273.15;
         t.settle_time = settle;
-        let settle_steps = t.settle_steps();
-        if settle_steps >= time.n_steps {
-            return Err(ConfigError::new(
-                "time.end",
-                format!(
-                    "must leave steps after the settling ({settle_steps} steps of {} s)",
-                    time.dt
-                ),
-            ));
-        }
-        t.collapse_time = (time.n_steps - settle_steps) as f64 * time.dt;
+        t.collapse_time = time_after_settling(t.settle_steps(), time)?;
         let model = ColumnModel::new(&t).map_err(|e| ConfigError::new("column", e.to_string()))?;
         check_time_step(&model, time)?;
         let n = model.state.points.len();
@@ -164,10 +156,6 @@ impl MultiscaleKind for ColumnOutputs {
             rve_fields: PointRveFields::default(),
         };
         Ok((model, outputs))
-    }
-
-    fn first_samples(_model: &ColumnModel) -> Vec<[f64; 3]> {
-        Vec::new()
     }
 
     fn sample(r: &ColumnRecord, totals: &ColumnTotals) -> Option<[f64; 3]> {
@@ -228,10 +216,7 @@ impl MultiscaleKind for ColumnOutputs {
     ) -> Result<(), IoError> {
         let p = &state.mpm.points;
         let t0 = model.case.test.initial_temperature;
-        for k in 0..p.len() {
-            self.rise[k] = p.temperature[k] - t0;
-            self.pressure[k] = -0.5 * (p.stress[k][0] + p.stress[k][1]);
-        }
+        rise_and_pressure(p, t0, &mut self.rise, &mut self.pressure);
         for (b, r) in self.bonds.iter_mut().zip(&state.mpm.material) {
             *b = r.rve.contacts.intact_bond_count() as f64;
         }

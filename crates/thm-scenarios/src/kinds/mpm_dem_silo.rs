@@ -20,7 +20,9 @@ use serde::{Deserialize, Serialize};
 use thm_coupling::multiscale::silo::{Silo, SiloModel, SiloRecord, SiloTest, SiloTotals};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 
-use super::multiscale::{Multiscale, MultiscaleKind, kind_state};
+use super::multiscale::{
+    Multiscale, MultiscaleKind, kind_state, rise_and_pressure, time_after_settling,
+};
 use crate::config::{TimeControl, check_count, check_range};
 use crate::error::ConfigError;
 use crate::profiles::Profile;
@@ -129,17 +131,7 @@ impl MultiscaleKind for SiloOutputs {
         t.initial_temperature = s.initial_temperature.si() - 273.15;
         t.plate_speed = s.plate_speed.si();
         t.settle_time = settle;
-        let settle_steps = t.settle_steps();
-        if settle_steps >= time.n_steps {
-            return Err(ConfigError::new(
-                "time.end",
-                format!(
-                    "must leave steps after the settling ({settle_steps} steps of {} s)",
-                    time.dt
-                ),
-            ));
-        }
-        t.discharge_time = (time.n_steps - settle_steps) as f64 * time.dt;
+        t.discharge_time = time_after_settling(t.settle_steps(), time)?;
         let model = SiloModel::new(&t).map_err(|e| ConfigError::new("silo", e.to_string()))?;
         let n = model.state.points.len();
         let outputs = Self {
@@ -149,10 +141,6 @@ impl MultiscaleKind for SiloOutputs {
             rve_frames: RveFrames::default(),
         };
         Ok((model, outputs))
-    }
-
-    fn first_samples(_model: &SiloModel) -> Vec<[f64; 3]> {
-        Vec::new()
     }
 
     fn sample(r: &SiloRecord, totals: &SiloTotals) -> Option<[f64; 3]> {
@@ -213,10 +201,7 @@ impl MultiscaleKind for SiloOutputs {
     ) -> Result<(), IoError> {
         let p = &state.mpm.points;
         let t0 = model.case.test.initial_temperature;
-        for k in 0..p.len() {
-            self.rise[k] = p.temperature[k] - t0;
-            self.pressure[k] = -0.5 * (p.stress[k][0] + p.stress[k][1]);
-        }
+        rise_and_pressure(p, t0, &mut self.rise, &mut self.pressure);
         let grid = UnstructuredGrid::particles(&p.position)
             .with_point_field("temperature_rise [K]", FieldValues::Scalar(&self.rise))
             .with_point_field(

@@ -119,10 +119,12 @@ pub trait MultiscaleKind: Sized {
         params: &Self::Params,
         time: &TimeControl,
     ) -> Result<(MultiscaleModel<Self::Case>, Self), ConfigError>;
-    /// The samples the run starts with.
+    /// The samples the run starts with. Default: none.
     fn first_samples(
-        model: &MultiscaleModel<Self::Case>,
-    ) -> Vec<<Self::State as KindState<Self::Case>>::Sample>;
+        _model: &MultiscaleModel<Self::Case>,
+    ) -> Vec<<Self::State as KindState<Self::Case>>::Sample> {
+        Vec::new()
+    }
     /// The sample of `record` (taken every [`SAMPLE_EVERY`] steps), if the kind samples now.
     fn sample(
         record: &<Self::Case as Protocol>::Record,
@@ -284,6 +286,35 @@ pub fn check_time_step<C: Protocol>(
         ));
     }
     Ok(())
+}
+
+/// The time left after a settling of `settle_steps` steps, which must leave steps of the
+/// run; else an error at `time.end`.
+pub fn time_after_settling(settle_steps: u64, time: &TimeControl) -> Result<f64, ConfigError> {
+    if settle_steps >= time.n_steps {
+        return Err(ConfigError::new(
+            "time.end",
+            format!(
+                "must leave steps after the settling ({settle_steps} steps of {} s)",
+                time.dt
+            ),
+        ));
+    }
+    Ok((time.n_steps - settle_steps) as f64 * time.dt)
+}
+
+/// Each point's temperature rise above `t0` and mean pressure `−(σ_xx + σ_yy)/2`
+/// (compression positive), into `rise` and `pressure`.
+pub fn rise_and_pressure(
+    points: &thm_mpm::MaterialPoints,
+    t0: f64,
+    rise: &mut [f64],
+    pressure: &mut [f64],
+) {
+    for k in 0..points.len() {
+        rise[k] = points.temperature[k] - t0;
+        pressure[k] = -0.5 * (points.stress[k][0] + points.stress[k][1]);
+    }
 }
 
 /// Brings every process's copy of `points` up to date when `material` is distributed (see
