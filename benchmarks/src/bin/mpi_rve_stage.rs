@@ -65,8 +65,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 type Sample = [f64; 5];
 
 fn step(model: &mut BiaxialModel) -> Result<Sample, Box<dyn std::error::Error>> {
-    let before = model
-        .material
+    let before = model.materials[0]
         .distribution()
         .map(|d| distributed::lock(d).stats());
     let dt = model.case.test.time_step;
@@ -81,8 +80,7 @@ fn step(model: &mut BiaxialModel) -> Result<Sample, Box<dyn std::error::Error>> 
         .step_batch(&mut model.state, &mut timed, dt)?;
     let exchange = timed.exchange;
     let total = t.elapsed().as_secs_f64();
-    let after = model
-        .material
+    let after = model.materials[0]
         .distribution()
         .map(|d| distributed::lock(d).stats());
     let (compute, comm) = match (before, after) {
@@ -139,7 +137,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // One synchronisation (what a frame or a checkpoint costs): every rank takes the others'
     // RVEs.
     let (mut sync_ms, mut sync_mb) = (0.0, 0.0);
-    if let Some(d) = model.material().distribution() {
+    if let Some(d) = model.materials[0].distribution() {
         let mut g = distributed::lock(d);
         let t = Instant::now();
         g.synchronise(&mut model.state.material)?;
