@@ -17,7 +17,7 @@ use thm_vpn_mesh::{NONE, PoreMesh};
 
 use crate::geometry::{BoundaryFace, FaceGeometry};
 use crate::params::{HeatModel, SideCondition};
-use crate::stepper::{boundary_conductance, face_conductivity, limit_cross};
+use crate::stepper::{boundary_conductance, boundary_correction, face_conductivity, limit_cross};
 use crate::{FlowInput, HeatError, HeatGeometry, HeatState, HeatStepper};
 
 #[inline]
@@ -170,7 +170,6 @@ impl HeatStepper {
                     } = geometry.boundary[slot as usize];
                     let conductivity = self.conductivity[c0];
                     let cond = &model.sides[side as usize];
-                    let correction = dot(self.gradient[c0], tangent);
                     match cond {
                         SideCondition::HeatFlux(q) => rhs[c0] += q * area,
                         SideCondition::Temperature(_) | SideCondition::Convective { .. } => {
@@ -179,6 +178,13 @@ impl HeatStepper {
                                 SideCondition::Convective { ambient, .. } => *ambient,
                                 _ => t_bc[side as usize],
                             };
+                            let correction = boundary_correction(
+                                self.gradient[c0],
+                                tangent,
+                                outside,
+                                temp[c0],
+                                model.cross_limit,
+                            );
                             diag[c0] += g;
                             rhs[c0] += g * (outside - correction);
                         }
@@ -274,8 +280,13 @@ impl HeatStepper {
             });
         }
         // Energy through the boundary over the step, with the terms the matrix used.
-        crate::stepper::boundary_faces(geometry, &mut self.boundary_face_list);
+        crate::stepper::boundary_faces(
+            geometry,
+            &mut self.boundary_face_list,
+            &mut self.boundary_face_side,
+        );
         let mut entered = 0.0;
+        let mut by_side = [0.0; 5];
         for &f in &self.boundary_face_list {
             let f = f as usize;
             let FaceGeometry::Boundary { slot } = geometry.face[f] else {
@@ -290,6 +301,7 @@ impl HeatStepper {
             let c = mesh.face_cells[f][0] as usize;
             let tc = rhs[c];
             let cond = &model.sides[side as usize];
+            let before = entered;
             entered += match cond {
                 SideCondition::HeatFlux(q) => q * area,
                 SideCondition::Temperature(_) | SideCondition::Convective { .. } => {
@@ -298,7 +310,14 @@ impl HeatStepper {
                         SideCondition::Convective { ambient, .. } => *ambient,
                         _ => t_bc[side as usize],
                     };
-                    g * (outside - dot(self.gradient[c], tangent) - tc)
+                    let correction = boundary_correction(
+                        self.gradient[c],
+                        tangent,
+                        outside,
+                        state.temperature[c],
+                        model.cross_limit,
+                    );
+                    g * (outside - correction - tc)
                 }
             };
             let m = input.boundary_mass_flux[f];
@@ -309,8 +328,10 @@ impl HeatStepper {
                 (false, SideCondition::Temperature(_)) => rate * (t_bc[side as usize] - t_ref),
                 (false, _) => rate * (tc - t_ref),
             };
+            by_side[side as usize] += (entered - before) * dt;
         }
         self.boundary_energy = entered * dt;
+        self.boundary_energy_by_side = by_side;
         state.temperature.copy_from_slice(&rhs);
         state.time = t_new;
         state.steps += 1;

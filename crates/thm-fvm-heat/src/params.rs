@@ -150,7 +150,10 @@ pub enum CrossDiffusion {
     #[default]
     Full,
     /// |cross term| ≤ `ratio` × |two-point term| on every face (`ratio` ≥ 0; 0 drops the
-    /// cross term, 1 is the usual "limited 0.5" of the literature).
+    /// cross term, 1 is the usual "limited 0.5" of the literature). On a boundary face of
+    /// cases I and III the non-orthogonal correction (the temperature difference between the
+    /// face centroid and the foot of the normal through the cell centroid) is capped the same
+    /// way against the two-point difference between the outside and the cell.
     Limited { ratio: f64 },
 }
 

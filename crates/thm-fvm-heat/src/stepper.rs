@@ -117,17 +117,17 @@ pub struct StepReport {
     pub stability_limit: f64,
 }
 
-/// The faces on the outer boundary, in face order (rebuilt when the mesh size changes).
-pub(crate) fn boundary_faces(geometry: &HeatGeometry, out: &mut Vec<u32>) {
+/// The faces on the outer boundary, in face order, and the side of each (rebuilt when the
+/// mesh size changes).
+pub(crate) fn boundary_faces(geometry: &HeatGeometry, out: &mut Vec<u32>, sides: &mut Vec<u8>) {
     out.clear();
-    out.extend(
-        geometry
-            .face
-            .iter()
-            .enumerate()
-            .filter(|(_, g)| matches!(g, FaceGeometry::Boundary { .. }))
-            .map(|(f, _)| f as u32),
-    );
+    sides.clear();
+    for (f, g) in geometry.face.iter().enumerate() {
+        if let FaceGeometry::Boundary { slot } = g {
+            out.push(f as u32);
+            sides.push(geometry.boundary[*slot as usize].side);
+        }
+    }
 }
 
 /// Scratch buffers of the explicit step. Holds no state between calls: every buffer is
@@ -137,8 +137,13 @@ pub struct HeatStepper {
     /// Energy \[J\] that entered through the outer boundary during the last step
     /// (conduction and advected enthalpy `ṁ c_p (T − T_ref)`).
     pub(crate) boundary_energy: f64,
+    /// The same by boundary side (indexed as `HeatModel`'s sides: left, right, bottom, top,
+    /// outline).
+    pub(crate) boundary_energy_by_side: [f64; 5],
     /// Faces on the outer boundary.
     pub(crate) boundary_face_list: Vec<u32>,
+    /// The side of each face of `boundary_face_list`.
+    pub(crate) boundary_face_side: Vec<u8>,
     // Per cell.
     pub(crate) capacity: Vec<f64>,
     pub(crate) conductivity: Vec<f64>,
@@ -207,7 +212,11 @@ impl HeatStepper {
         // that computes them also gives the face conductances of the stability limit: one pass
         // over the mesh yields both, and the limit then sets the length.
         self.heat_rates(model, geometry, mesh, input, &state.temperature, t0, true);
-        boundary_faces(geometry, &mut self.boundary_face_list);
+        boundary_faces(
+            geometry,
+            &mut self.boundary_face_list,
+            &mut self.boundary_face_side,
+        );
         let limit = self.net_heat_and_stability_limit(geometry, mesh, input);
         let allowed = model.stability_safety * limit;
         let substeps = if allowed.is_finite() {
@@ -217,6 +226,8 @@ impl HeatStepper {
         };
         let h = dt / substeps as f64;
         self.boundary_energy = h * self.boundary_heat_rate();
+        self.boundary_energy_by_side = [0.0; 5];
+        self.add_boundary_energy_by_side(h);
         if let Some(c) = self.apply_net_heat(&mut state.temperature, h) {
             return Err(non_finite_temperature(state, c, t0));
         }
@@ -242,6 +253,22 @@ impl HeatStepper {
     /// `Σ C (T − T_ref)` over a step is accounted for to round-off.
     pub fn boundary_energy(&self) -> f64 {
         self.boundary_energy
+    }
+
+    /// [`Self::boundary_energy`] by boundary side, indexed left, right, bottom, top, outline
+    /// (`thm_vpn_mesh::BoundarySide`'s order): the energy \[J\] that entered through each
+    /// during the last step. Through a side held at a temperature at steady state it is the
+    /// heat rate through the specimen times the step.
+    pub fn boundary_energy_by_side(&self) -> [f64; 5] {
+        self.boundary_energy_by_side
+    }
+
+    /// Adds `h` × the heat rate of the last face pass through each boundary side to
+    /// `boundary_energy_by_side`.
+    fn add_boundary_energy_by_side(&mut self, h: f64) {
+        for (&f, &side) in self.boundary_face_list.iter().zip(&self.boundary_face_side) {
+            self.boundary_energy_by_side[side as usize] += h * self.face_heat[f as usize];
+        }
     }
 
     /// Σ over the boundary faces of the heat rate into the domain of the last face pass \[W\],
@@ -282,6 +309,7 @@ impl HeatStepper {
     ) -> Result<(), HeatError> {
         self.heat_rates(model, geometry, mesh, input, &state.temperature, t, false);
         self.boundary_energy += h * self.boundary_heat_rate();
+        self.add_boundary_energy_by_side(h);
         if let Some(c) = self.advance(geometry, mesh, &mut state.temperature, h) {
             return Err(non_finite_temperature(state, c, t));
         }
@@ -961,16 +989,25 @@ impl HeatStepper {
                             let conductivity = lam[c0];
                             let cond = &model.sides[side as usize];
                             // Temperature at the foot of the normal through the face centroid.
-                            let t_foot = t0 + dot(grad[c0], tangent);
+                            let t_foot = |outside: f64| {
+                                t0 + boundary_correction(
+                                    grad[c0],
+                                    tangent,
+                                    outside,
+                                    t0,
+                                    model.cross_limit,
+                                )
+                            };
                             let diffusive = match cond {
                                 SideCondition::Temperature(_) => {
+                                    let outside = sides[side as usize];
                                     conductivity * area / normal_distance
-                                        * (sides[side as usize] - t_foot)
+                                        * (outside - t_foot(outside))
                                 }
                                 SideCondition::HeatFlux(flux) => flux * area,
                                 SideCondition::Convective { ambient, .. } => {
                                     boundary_conductance(cond, conductivity, normal_distance, area)
-                                        * (ambient - t_foot)
+                                        * (ambient - t_foot(*ambient))
                                 }
                             };
                             let m = input.boundary_mass_flux[f];
@@ -1128,6 +1165,24 @@ impl HeatStepper {
     pub fn heat_capacity(&self) -> &[f64] {
         &self.capacity
     }
+}
+
+/// The non-orthogonal correction of a boundary face: the temperature difference
+/// `∇T · t` between the face centroid and the foot of the normal through the cell centroid
+/// (`t` the boundary face's tangential offset), limited as the cross term of a face inside a
+/// medium ([`limit_cross`]) against the two-point difference `outside − cell` of the face.
+/// Unlimited, a thin cell along the boundary whose gradient is steep (a sliver between a
+/// circle and a box side, next to a held end) turned it into a flux that cooled the cell
+/// below the held temperature.
+#[inline]
+pub(crate) fn boundary_correction(
+    gradient: [f64; 2],
+    tangent: [f64; 2],
+    outside: f64,
+    cell: f64,
+    limit: Option<f64>,
+) -> f64 {
+    limit_cross(dot(gradient, tangent), outside - cell, limit)
 }
 
 /// The cross-diffusion heat rate `cross` of a face, capped at `limit` times the magnitude of

@@ -217,3 +217,51 @@ fn cells_and_vertices_are_in_locality_order() {
         }
     }
 }
+
+/// With `side_points`, a circle 0.1 µm from a box side and the seeded bar (circles clamped
+/// inside its box, several close to a side but not on it): no fluid cell runs along a side
+/// farther than the Steiner spacing (`2π r̄ / segments`), and no cell has its three corners
+/// on one side. Without them the bar holds fluid triangles nearly flat along a side (seed 1:
+/// corners at x = 0 and y = 70.3, 76 and 80 mm).
+#[test]
+fn no_fluid_cell_runs_along_a_box_side() {
+    let near = [circle(0.3, 0.5, 0.2, 0), circle(0.7, 0.3, 0.2999999, 1)];
+    let bar = packing::random_packing(&packing::PackingSpec::paper_bar(1));
+    for (circles, [w, h]) in [(near.to_vec(), [1.0, 1.0]), (bar, [0.020, 0.080])] {
+        let segments = 32;
+        let mut params = MeshParams::new(
+            Outline::Box {
+                min: [0.0, 0.0],
+                max: [w, h],
+            },
+            segments,
+        );
+        params.side_points = true;
+        let pm = mesh_packing(&circles, &[], &params.validate().unwrap()).unwrap();
+        let m = &pm.mesh;
+        let r_mean = circles.iter().map(|c| c.radius).sum::<f64>() / circles.len() as f64;
+        let spacing = std::f64::consts::TAU * r_mean / f64::from(segments);
+        let sides = [(0, 0.0), (0, w), (1, 0.0), (1, h)];
+        for c in 0..m.n_cells() {
+            let v = m.cell_vertices[c].map(|k| m.vertices[k as usize]);
+            for (axis, value) in sides {
+                let on = v.iter().filter(|p| p[axis] == value).count();
+                assert!(on < 3, "cell {c} has its three corners on a side: {v:?}");
+                if on == 2 && m.cell_kind[c].is_fluid() {
+                    let along: Vec<f64> = v
+                        .iter()
+                        .filter(|p| p[axis] == value)
+                        .map(|p| p[1 - axis])
+                        .collect();
+                    let len = (along[0] - along[1]).abs();
+                    assert!(
+                        len <= spacing * (1.0 + 1e-9),
+                        "fluid cell {c} runs {len} m along a side (spacing {spacing} m): {v:?}"
+                    );
+                }
+            }
+        }
+        let total = m.fluid_area() + m.solid_area();
+        assert!((total - w * h).abs() < 1e-12 * w * h, "{total}");
+    }
+}
