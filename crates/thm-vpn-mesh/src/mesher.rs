@@ -1184,7 +1184,7 @@ fn side_points(
         for w in on.windows(2) {
             let gap = w[1] - w[0];
             let parts = (gap / spacing).ceil();
-            if parts < 2.0 || parts > 1e6 || covered(0.5 * (w[0] + w[1])) {
+            if !(2.0..=1e6).contains(&parts) || covered(0.5 * (w[0] + w[1])) {
                 continue;
             }
             for j in 1..parts as u32 {
