@@ -14,8 +14,8 @@ use std::time::Instant;
 
 use thm_coupling::bar::water_air;
 use thm_coupling::bar::{
-    BarCase, CASE_A_BOND_TENSILE_STRENGTH, CASE_A_DENSITY_SCALE, PAPER_BAR, bar_params_sized,
-    bar_state_sized, case_a_coupling_step, scale_sphere_density,
+    BarCase, BarEnds, CASE_A_BOND_TENSILE_STRENGTH, CASE_A_DENSITY_SCALE, PAPER_BAR,
+    bar_params_sized, bar_state_sized, case_a_coupling_step, scale_sphere_density,
 };
 use thm_coupling::pore_scale::{PoreScaleStepper, StageSeconds};
 
@@ -35,12 +35,13 @@ struct Measured {
 fn run(scale: f64, end: f64) -> Result<Measured, String> {
     let case = BarCase::ContractionFree;
     let size = [scale * PAPER_BAR[0], scale * PAPER_BAR[1]];
-    let mut params = bar_params_sized(case, 32, size);
+    let mut params = bar_params_sized(case, 32, size, BarEnds::Cut);
     params.dem.time_step *= CASE_A_DENSITY_SCALE.sqrt();
     params.contact.tensile_strength = CASE_A_BOND_TENSILE_STRENGTH;
     params.contact.cohesion = 5.0 * CASE_A_BOND_TENSILE_STRENGTH;
     let config = params.validate().map_err(|e| e.to_string())?;
-    let mut s = bar_state_sized(case, &config, 1, &water_air(), size).map_err(|e| e.to_string())?;
+    let mut s = bar_state_sized(case, &config, 1, &water_air(), size, BarEnds::Cut)
+        .map_err(|e| e.to_string())?;
     scale_sphere_density(&mut s, CASE_A_DENSITY_SCALE).map_err(|e| e.to_string())?;
     let rule = case_a_coupling_step()
         .validate()

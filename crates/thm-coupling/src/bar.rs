@@ -6,7 +6,16 @@
 //! [`case_a_coupling_step`] and [`crack_report`]).
 //!
 //! The packing is `thm-vpn-mesh`'s seeded 20 × 80 mm bar of 4–8 mm circles at about 10 %
-//! porosity; every overlapping pair is bonded. The figures with the boundary conditions
+//! porosity; every overlapping pair is bonded. Its ends are cut ([`BarEnds::Cut`], the
+//! default): the packing is generated beyond them and the spheres that reach into the bar are
+//! kept, so the end lines cut spheres and the held end temperature (A-Sect. 2, boundary case
+//! I, on any face at the domain boundary) acts on their solid faces as on the pore faces.
+//! With every sphere inside the bar ([`BarEnds::Film`], the reading before) the ends hold only
+//! water and the solid feels them through the Nusselt film (A-Eq. 45). A-Sect. 4's 0.52 K
+//! supports the cut ends; A-Sect. 6 case b's 333.3 K the film ends (verification cases
+//! `coupling/bar_cooling_advection` and `coupling/bar_contraction_fixed` run both;
+//! `docs/cases/bar_cooling.md`). [`steady_conductivity`] measures a bar network's own
+//! conductivity, which A-Eq. 63's volume-weighted mean overestimates. The figures with the boundary conditions
 //! (A-Figs. 11, 14, 18) are missing from the text; what the text says and how it is read:
 //!
 //! - **Cooling bar** (A-Sect. 4): single-phase water, cooled by 30 K (323.16 K → ends at
@@ -23,7 +32,8 @@
 //!   fluid λ × 10, α_exp = 8.3·10⁻⁴ 1/K, every sphere held, 17 s.
 //!
 //! Sides are impermeable and adiabatic in all cases. In the water cases, the pores that no
-//! channel connects to a reservoir (40 of 604 on seed 1) cool at fixed mass and volume, and
+//! channel connects to a reservoir (none with cut ends on seeds 1–5; 40 of 604 on seed 1
+//! with film ends, [`crate::pore_scale::unconnected_pores`]) cool at fixed mass and volume, and
 //! their water goes into tension (about −75 MPa by 400 s on the liquid branch of the EOS):
 //! the water cases set `liquid_tension`, which lets pores holding only liquid carry a negative
 //! pressure (cavitation is not modelled); case b has gas in every pore and does not. The S2S apertures are those of contacts
@@ -66,6 +76,26 @@ pub const PAPER_BAR: [f64; 2] = [BAR_WIDTH, BAR_LENGTH];
 pub const SOLID_DENSITY: f64 = 2600.0;
 /// Pressure of the water reservoirs at the top (and, in A-Sect. 4, the bottom) \[Pa\].
 pub const TOP_PRESSURE: f64 = 1e5;
+
+/// How the bar's ends are made, and so how the held end temperature reaches the spheres.
+/// A-Sect. 2's boundary case I holds "at the domain boundary" on any cell face; which faces
+/// lie on the end lines depends on how the packing meets them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BarEnds {
+    /// The bar is cut from a longer packing, as a specimen is sawn from a block: spheres
+    /// cross the end lines and are cut by them, so the end lines hold solid faces as well as
+    /// pore faces and case I acts on both. The mesh has Steiner points along the box sides
+    /// (`thm_vpn_mesh::MeshParams::side_points`). This reading reproduces A-Sect. 4 (see
+    /// `docs/cases/bar_cooling.md`).
+    #[default]
+    Cut,
+    /// Every sphere inside the bar (the packing's circles clamped inside its box), so every
+    /// face on the end lines belongs to a water cell and the held temperature reaches the
+    /// solid only through that water and the Nusselt film of A-Eq. 45: the end step that
+    /// case b's 333.3 K needs. The mesh is the mesher's default (no side points).
+    Film,
+}
 
 /// Which of the paper's bar cases.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -118,22 +148,52 @@ impl BarCase {
     }
 }
 
-/// The bar packing as a DEM state: `thm-vpn-mesh`'s seeded A-Fig. 8 bar, spheres in the
-/// plane, density 2600 kg/m³, every overlapping pair bonded at its current overlap.
+/// The bar packing as a DEM state: `thm-vpn-mesh`'s seeded A-Fig. 8 bar with cut ends
+/// ([`BarEnds::Cut`]), spheres in the plane, density 2600 kg/m³, every overlapping pair bonded
+/// at its current overlap.
 pub fn bar_packing(seed: u64, temperature: f64) -> Result<DemState, CouplingError> {
-    bar_packing_sized(seed, temperature, PAPER_BAR)
+    bar_packing_sized(seed, temperature, PAPER_BAR, BarEnds::Cut)
 }
 
+/// How far beyond each end a cut bar's packing is generated \[m\]: the largest diameter, so
+/// that the packing's own walls (where the generator clamps the circles) lie a sphere beyond
+/// the end lines.
+pub const CUT_MARGIN: f64 = 0.008;
+
+/// The generator's porosity target for a cut bar: the generated box is [`CUT_MARGIN`] longer
+/// at each end and its walls hold looser layers, so aiming the whole box at 12 % leaves
+/// about 10 % inside the bar (A-Sect. 3: "roughly p = 10 %").
+pub const CUT_POROSITY_TARGET: f64 = 0.12;
+
 /// The A-Fig. 8 bar's packing recipe (4–8 mm spheres, about 10 % porosity) on a bar of
-/// `[width, length]` \[m\] (the scaling benchmark's larger bars).
+/// `[width, length]` \[m\] (the scaling benchmark's larger bars), its ends made as `ends`
+/// says: cut, the packing is generated [`CUT_MARGIN`] beyond each end and the spheres that
+/// reach into the bar are kept; film, generated inside the bar.
 pub fn bar_packing_sized(
     seed: u64,
     temperature: f64,
     [width, length]: [f64; 2],
+    ends: BarEnds,
 ) -> Result<DemState, CouplingError> {
     let mut spec = PackingSpec::paper_bar(seed);
     spec.box_max = [width, length];
-    let circles = random_packing(&spec);
+    let circles = match ends {
+        BarEnds::Film => random_packing(&spec),
+        BarEnds::Cut => {
+            spec.box_min[1] = -CUT_MARGIN;
+            spec.box_max[1] = length + CUT_MARGIN;
+            spec.target_porosity = Some(CUT_POROSITY_TARGET);
+            // A sphere that only touches an end line leaves no area inside: kept spheres
+            // reach at least 1 % of their radius into the bar.
+            random_packing(&spec)
+                .into_iter()
+                .filter(|c| {
+                    let reach = 0.01 * c.radius;
+                    c.centre[1] + c.radius > reach && c.centre[1] - c.radius < length - reach
+                })
+                .collect()
+        }
+    };
     let bonds = overlapping_pairs(&circles)
         .into_iter()
         .map(|[a, b]| (a.min(b) as usize, a.max(b) as usize))
@@ -158,11 +218,16 @@ pub fn bar_packing_sized(
 /// a and b), limited cross diffusion (ratio 1; case a, whose mesh moves, ratio 0; see
 /// `thm_fvm_heat::CrossDiffusion`).
 pub fn bar_params(case: BarCase, segments: u32) -> PoreScaleParams {
-    bar_params_sized(case, segments, PAPER_BAR)
+    bar_params_sized(case, segments, PAPER_BAR, BarEnds::Cut)
 }
 
 /// [`bar_params`] on a bar of `[width, length]` \[m\].
-pub fn bar_params_sized(case: BarCase, segments: u32, size: [f64; 2]) -> PoreScaleParams {
+pub fn bar_params_sized(
+    case: BarCase,
+    segments: u32,
+    size: [f64; 2],
+    ends: BarEnds,
+) -> PoreScaleParams {
     let end = case.end_temperature();
     let mut heat = HeatParams::paper_a_table_1();
     heat.boundaries = [BoundarySide::Bottom, BoundarySide::Top]
@@ -233,7 +298,7 @@ pub fn bar_params_sized(case: BarCase, segments: u32, size: [f64; 2]) -> PoreSca
         },
         contact: CohesiveFrictionalParams::paper_a_table_1(),
         thermal_expansion,
-        mesh: bar_mesh_params(segments, size),
+        mesh: bar_mesh_params(segments, size, ends),
         remesh: RemeshCriteriaParams::default(),
         flow: FlowParameters {
             // Case a: a flow step that needs more sub-steps fails, and the adaptive coupled
@@ -273,7 +338,7 @@ pub fn bar_state(
     seed: u64,
     fluid: &impl thm_vpn_flow::PoreFluid,
 ) -> Result<PoreScaleState, CouplingError> {
-    bar_state_sized(case, config, seed, fluid, PAPER_BAR)
+    bar_state_sized(case, config, seed, fluid, PAPER_BAR, BarEnds::Cut)
 }
 
 /// [`bar_state`] on a bar of `[width, length]` \[m\] (`config` from [`bar_params_sized`]).
@@ -283,9 +348,10 @@ pub fn bar_state_sized(
     seed: u64,
     fluid: &impl thm_vpn_flow::PoreFluid,
     size: [f64; 2],
+    ends: BarEnds,
 ) -> Result<PoreScaleState, CouplingError> {
     let t0 = case.initial_temperature();
-    let mut dem = bar_packing_sized(seed, t0, size)?;
+    let mut dem = bar_packing_sized(seed, t0, size, ends)?;
     if case == BarCase::ContractionFree {
         hold_ends_of(&mut dem, size[1]);
     }
@@ -387,6 +453,65 @@ impl EquivalentMedium {
             case.end_temperature(),
         )
     }
+}
+
+/// The effective conductivity of a bar's own network along its length \[W/(m K)\], measured
+/// by a steady conduction run through it: the state's mesh, heat model and fluid (at rest, at
+/// the state's mean liquid density) with the bottom held at `T` and the top at `T + 10 K`, the
+/// sides adiabatic, solved to steady state (backward Euler steps of 10⁹ s until the heat rate
+/// through the top changes by less than 10⁻¹⁰ of itself), then `λ = Q L / (ΔT W b)` with `Q`
+/// the heat rate through the top, `L` and `W` the bar's length and width and `b` the mesh
+/// thickness. It holds every path heat takes in the network (solid cells, contact chords,
+/// the pore water and the Nusselt film between them, A-Eqs. 43–45, at rest), which A-Eq. 63's
+/// volume-weighted mean does not see. `size` is `[W, L]`.
+pub fn steady_conductivity(
+    state: &PoreScaleState,
+    heat: &HeatParams,
+    size: [f64; 2],
+) -> Result<f64, CouplingError> {
+    use thm_fvm_heat::{FlowInput, HeatGeometry, HeatModel, HeatState, HeatStepper};
+    let mesh = &state.mesh.mesh;
+    let [width, length] = size;
+    let (t_low, rise) = (293.15, 10.0);
+    let mut params = heat.clone();
+    params.boundaries = vec![
+        BoundaryParams {
+            side: BoundarySide::Bottom,
+            condition: HeatBoundary::Temperature {
+                temperature: TemperatureSchedule::Constant(t_low),
+            },
+        },
+        BoundaryParams {
+            side: BoundarySide::Top,
+            condition: HeatBoundary::Temperature {
+                temperature: TemperatureSchedule::Constant(t_low + rise),
+            },
+        },
+    ];
+    let model = HeatModel::new(&params, mesh).map_err(CouplingError::Heat)?;
+    let geometry = HeatGeometry::new(&model, mesh).map_err(CouplingError::Heat)?;
+    let rho = &state.flow.liquid_density;
+    let rho_w = rho.iter().sum::<f64>() / (rho.len().max(1) as f64);
+    let gas = &state.flow.gas_density;
+    let rho_g = gas.iter().sum::<f64>() / (gas.len().max(1) as f64);
+    let input = FlowInput::liquid_at_rest(mesh, rho_w, rho_g);
+    let mut hs = HeatState::uniform(mesh, t_low + 0.5 * rise);
+    let mut stepper = HeatStepper::default();
+    let dt = 1e9;
+    let top = 3; // BoundarySide::Top in `boundary_energy_by_side`
+    let mut q = f64::NAN;
+    for _ in 0..200 {
+        stepper
+            .implicit_step(&model, &geometry, mesh, &input, &mut hs, dt)
+            .map_err(CouplingError::Heat)?;
+        let next = stepper.boundary_energy_by_side()[top] / dt;
+        let converged = (next - q).abs() <= 1e-10 * next.abs();
+        q = next;
+        if converged {
+            break;
+        }
+    }
+    Ok(q * length / (rise * width * mesh.thickness))
 }
 
 /// The liquid mass flux through the bar averaged since the start: the liquid that entered
@@ -539,12 +664,15 @@ pub fn largest_bond_tension(state: &PoreScaleState) -> f64 {
 /// circle: the paper's (A-Eq. 9 alone, the default snap tolerance). The narrow-gap floor and
 /// a coarser snap (`thm_vpn_mesh::T2tApertureLaw`, `MeshParams::snap_tolerance`) are options
 /// of a scenario (`docs/cases/bar_contraction_free.md` compares case a with and without).
-pub fn bar_mesh_params(segments: u32, size: [f64; 2]) -> MeshParams {
-    MeshParams::new(
+/// Cut ends ([`BarEnds::Cut`]) add the Steiner points along the box sides.
+pub fn bar_mesh_params(segments: u32, size: [f64; 2], ends: BarEnds) -> MeshParams {
+    let mut mesh = MeshParams::new(
         Outline::Box {
             min: [0.0, 0.0],
             max: size,
         },
         segments,
-    )
+    );
+    mesh.side_points = ends == BarEnds::Cut;
+    mesh
 }

@@ -2,7 +2,10 @@
 //! case b, and the stop with a named pore when single-phase water goes into tension.
 
 use thm_coupling::bar::water_air;
-use thm_coupling::bar::{BarCase, bar_packing, bar_params, bar_state, centreline_cells};
+use thm_coupling::bar::{
+    BarCase, BarEnds, PAPER_BAR, bar_packing, bar_params, bar_params_sized, bar_state,
+    bar_state_sized, centreline_cells,
+};
 use thm_coupling::pore_scale::{CouplingError, PoreScaleStepper};
 
 const CASES: [BarCase; 4] = [
@@ -71,16 +74,18 @@ fn case_b_steps_conserve_both_phases_and_stay_between_the_end_and_initial_temper
 
 #[test]
 fn sealed_water_goes_into_tension_which_stops_the_run_unless_allowed() {
-    // A-Sect. 4: water only, 0.1 MPa reservoirs at both ends. The 40 pores of this mesh that
+    // A-Sect. 4 with film ends: water only, 0.1 MPa reservoirs at both ends. The 40 pores of
+    // this mesh that
     // no channel connects to a reservoir cool at fixed mass, and water contracts: without
     // `liquid_tension` the run stops at the flow stage naming the pore; with it, those pores
     // hold a negative pressure and keep their mass while the connected ones are refilled.
     let case = BarCase::Cooling;
-    let mut params = bar_params(case, 32);
+    let mut params = bar_params_sized(case, 32, PAPER_BAR, BarEnds::Film);
     assert!(params.liquid_tension, "the water cases allow tension");
     params.liquid_tension = false;
     let config = params.validate().expect("parameters");
-    let mut s = bar_state(case, &config, 1, &water_air()).expect("state");
+    let mut s =
+        bar_state_sized(case, &config, 1, &water_air(), PAPER_BAR, BarEnds::Film).expect("state");
     let mut stepper = PoreScaleStepper::new(config, water_air(), &s).expect("stepper");
     let mut stopped = None;
     for _ in 0..20 {
@@ -102,8 +107,11 @@ fn sealed_water_goes_into_tension_which_stops_the_run_unless_allowed() {
         }
         other => panic!("expected a stop on negative pressure, got {other:?}"),
     }
-    let config = bar_params(case, 32).validate().expect("parameters");
-    let mut s = bar_state(case, &config, 1, &water_air()).expect("state");
+    let config = bar_params_sized(case, 32, PAPER_BAR, BarEnds::Film)
+        .validate()
+        .expect("parameters");
+    let mut s =
+        bar_state_sized(case, &config, 1, &water_air(), PAPER_BAR, BarEnds::Film).expect("state");
     let mut stepper = PoreScaleStepper::new(config, water_air(), &s).expect("stepper");
     let m0 = s.liquid_mass();
     for _ in 0..20 {
@@ -237,4 +245,25 @@ fn case_a_holds_the_end_spheres_and_frees_the_others() {
     for (i, (now, before)) in p.position.iter().zip(&start).enumerate() {
         assert_eq!(now != before, !p.fixed[i], "sphere {i}");
     }
+}
+
+/// No pore of the shipped bars (cut ends, seeds 1–5, 32 points per circle, as the scenarios
+/// and `cargo run -p thm-benchmarks --bin bar_ends` mesh them) is sealed: every pore is joined
+/// to a reservoir of the cooling bar by some chain of channels. With film ends seed 1 has 40
+/// sealed pores (the check sees them), where the clamped end circles overlap three at a time.
+#[test]
+fn no_pore_of_the_shipped_cut_bars_is_sealed() {
+    let case = BarCase::Cooling;
+    let sealed = |seed: u64, ends: BarEnds| {
+        let config = bar_params_sized(case, 32, PAPER_BAR, ends)
+            .validate()
+            .expect("parameters");
+        let s = bar_state_sized(case, &config, seed, &water_air(), PAPER_BAR, ends).expect("state");
+        let stepper = PoreScaleStepper::new(config, water_air(), &s).expect("stepper");
+        thm_coupling::pore_scale::unconnected_pores(stepper.network())
+    };
+    for seed in 1..=5 {
+        assert_eq!(sealed(seed, BarEnds::Cut), 0, "seed {seed}");
+    }
+    assert_eq!(sealed(1, BarEnds::Film), 40);
 }

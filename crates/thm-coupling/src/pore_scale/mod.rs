@@ -104,6 +104,9 @@ pub struct StepReport {
     /// the enthalpy of the fluid that crossed it; `HeatStepper::boundary_energy`): the change
     /// of [`PoreScaleState::thermal_energy`] over the step, to round-off.
     pub boundary_energy: f64,
+    /// [`Self::boundary_energy`] by boundary side, indexed left, right, bottom, top, outline
+    /// (`HeatStepper::boundary_energy_by_side`) \[J\].
+    pub boundary_energy_by_side: [f64; 5],
     /// Wall time of each stage \[s\] (a diagnostic for benchmarks; not part of the physics).
     pub stage_seconds: StageSeconds,
 }
@@ -412,6 +415,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
         )?;
         lap(&mut seconds.heat);
         let boundary_energy = self.heat.boundary_energy();
+        let boundary_energy_by_side = self.heat.boundary_energy_by_side();
         if free {
             stages::sphere_radii(
                 &state.mesh,
@@ -437,6 +441,7 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             max_reynolds,
             remeshed,
             boundary_energy,
+            boundary_energy_by_side,
             stage_seconds: seconds,
         })
     }
@@ -547,6 +552,36 @@ fn derived(
         .set_solid_capacity_scale(mesh, &solid_capacity_scale(mesh, &state.solid_area_ref))
         .map_err(CouplingError::Heat)?;
     Ok((network, model, geometry))
+}
+
+/// The pores that no chain of channels joins to a boundary link: closed clusters whose
+/// fluid cannot leave or enter the network (in the water cases they cool at fixed mass and
+/// go into tension).
+pub fn unconnected_pores(network: &Network) -> usize {
+    let parts = network.parts();
+    let n = network.n_pores();
+    let mut reached = vec![false; n];
+    let mut queue: Vec<usize> = (0..network.n_links())
+        .map(|k| parts.link_pore[k] as usize)
+        .collect();
+    for &p in &queue {
+        reached[p] = true;
+    }
+    while let Some(p) = queue.pop() {
+        for &k in network.pore_channels(p) {
+            let [a, b] = parts.channel_pores[(k & !thm_vpn_flow::SECOND_END) as usize];
+            let other = if k & thm_vpn_flow::SECOND_END != 0 {
+                a
+            } else {
+                b
+            } as usize;
+            if !reached[other] {
+                reached[other] = true;
+                queue.push(other);
+            }
+        }
+    }
+    reached.iter().filter(|r| !**r).count()
 }
 
 /// Every two prescribed-pressure boundaries at different pressures are joined by some chain
