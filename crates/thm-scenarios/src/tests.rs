@@ -997,6 +997,11 @@ growth = 1.2
                 "segments = 16\npressure_force = \"cell_edges\"",
                 "bar.pressure_force",
             ),
+            (
+                "segments = 16",
+                "segments = 16\nends = \"alpha\"",
+                "bar.ends: unknown variant `alpha`, expected `cut` or `film`",
+            ),
             ("growth = 1.2", "growth = 20", "bar.coupling_step.growth"),
             ("min = \"1e-7 s\"", "min = \"1 s\"", "bar.coupling_step.min"),
             (
@@ -1025,7 +1030,10 @@ growth = 1.2
             .replace("case = \"contraction_fixed\"", "case = \"cooling\"")
             .replace("step = \"0.1 s\"", "step = \"1 s\"")
             .replace("end = \"0.6 s\"", "end = \"20 s\"")
-            .replace("segments = 16", "segments = 32\nliquid_tension = false")
+            .replace(
+                "segments = 16",
+                "segments = 32\nliquid_tension = false\nends = \"film\"",
+            )
             .replace("checkpoint_every = 2", "checkpoint_every = 1");
         let file = write_scenario(&dir, &text);
         let out = dir.join("out");

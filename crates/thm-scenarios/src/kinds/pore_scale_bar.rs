@@ -8,8 +8,9 @@
 
 use serde::{Deserialize, Serialize};
 use thm_coupling::bar::{
-    BarCase, CASE_A_DENSITY_SCALE, EquivalentMedium, bar_params, bar_state, case_a_coupling_step,
-    centreline_cells, crack_report, largest_bond_tension, mean_mass_flux, scale_sphere_density,
+    BarCase, BarEnds, CASE_A_DENSITY_SCALE, EquivalentMedium, PAPER_BAR, bar_params_sized,
+    bar_state_sized, case_a_coupling_step, centreline_cells, crack_report, largest_bond_tension,
+    mean_mass_flux, scale_sphere_density,
 };
 use thm_coupling::bar::{WaterAir, water_air};
 use thm_coupling::pore_scale::{
@@ -62,6 +63,12 @@ pub struct BarParams {
     /// Points per circle of the mesh (8 … 256).
     #[serde(default = "default_segments")]
     pub segments: u32,
+    /// How the bar's ends are made: `cut` (the default: spheres cross the end lines and are
+    /// cut by them, so the held temperature acts on solid and pore faces alike; reproduces
+    /// A-Sect. 4) or `film` (every sphere inside the bar: the ends hold water, and the solid
+    /// feels them through the Nusselt film; see `thm_coupling::bar::BarEnds`).
+    #[serde(default)]
+    pub ends: BarEnds,
     /// Whether pores holding only liquid may go into tension (default: the case's choice,
     /// true for the single-phase water cases; see `thm_coupling::bar`).
     #[serde(default)]
@@ -73,6 +80,11 @@ pub struct BarParams {
     /// ratio; default A-Table 1's 30 MPa).
     #[serde(default)]
     pub bond_tensile_strength: Option<Quantity<Pressure>>,
+    /// Whether the spheres at the ends are held (case a only; default true, A-Sect. 6: "fixed
+    /// only at both ends"; `thm_coupling::bar::END_HOLD_DEPTH`). With false no sphere is held
+    /// and the bar contracts freely: the run that tells the grips' share in where it cracks.
+    #[serde(default)]
+    pub held_ends: Option<bool>,
     /// The coupled-step rule (case a only; default `thm_coupling::bar::case_a_coupling_step`).
     #[serde(default)]
     pub coupling_step: Option<CouplingStepSection>,
@@ -381,6 +393,7 @@ impl Scenario for PoreScaleBar {
                 "bar.bond_tensile_strength",
                 b.bond_tensile_strength.is_some(),
             ),
+            ("bar.held_ends", b.held_ends.is_some()),
             ("bar.coupling_step", b.coupling_step.is_some()),
             ("bar.pressure_force", b.pressure_force.is_some()),
             ("bar.snap_tolerance", b.snap_tolerance.is_some()),
@@ -399,7 +412,7 @@ impl Scenario for PoreScaleBar {
                 format!("must be in 8 … 256, got {}", b.segments),
             ));
         }
-        let mut params = bar_params(case, b.segments);
+        let mut params = bar_params_sized(case, b.segments, PAPER_BAR, b.ends);
         if let Some(t) = b.liquid_tension {
             params.liquid_tension = t;
         }
@@ -457,11 +470,14 @@ impl Scenario for PoreScaleBar {
         let config = params
             .validate()
             .map_err(|e| ConfigError::new("bar", e.to_string()))?;
-        let mut state = bar_state(case, &config, b.seed, &water_air())
+        let mut state = bar_state_sized(case, &config, b.seed, &water_air(), PAPER_BAR, b.ends)
             .map_err(|e| ConfigError::new("bar", e.to_string()))?;
         if free {
             scale_sphere_density(&mut state, density_scale)
                 .map_err(|e| ConfigError::new("bar.density_scale", e.to_string()))?;
+            if b.held_ends == Some(false) {
+                state.dem.particles.fixed.fill(false);
+            }
         }
         let stepper = PoreScaleStepper::new(config, water_air(), &state)
             .map_err(|e| ConfigError::new("bar", e.to_string()))?;
