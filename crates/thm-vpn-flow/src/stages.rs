@@ -119,6 +119,34 @@ pub fn channel_fluxes(
         });
 }
 
+/// The mean liquid speed in every channel at the state's pressures \[m/s\]: the liquid
+/// layer's flow rate per unit width over its thickness, `|Q_q| / (α_q,up h)`, with the layer
+/// of the upwind pore as in [`channel_fluxes`] (A-Eqs. 10–15). Zero where the upwind pore
+/// holds no liquid, the channel is closed or the pressures are equal.
+pub fn channel_liquid_speeds(
+    network: &Network,
+    state: &FlowState,
+    config: &FlowConfig,
+) -> Vec<f64> {
+    let parts = network.parts();
+    let (mq, mp) = (config.liquid_viscosity(), config.gas_viscosity());
+    (0..network.n_channels())
+        .map(|c| {
+            let [i, j] = parts.channel_pores[c];
+            let (i, j) = (i as usize, j as usize);
+            let g = (state.pressure[i] - state.pressure[j]) / parts.channel_length[c];
+            let up = if g >= 0.0 { i } else { j };
+            let h = parts.channel_aperture[c];
+            let layer = state.liquid_fraction[up] * h;
+            if layer <= 0.0 {
+                return 0.0;
+            }
+            let (cq, _) = two_layer_conductances(h, state.liquid_fraction[up], mq, mp);
+            (cq * g).abs() / layer
+        })
+        .collect()
+}
+
 /// Flux of one channel or link from its upwind state (`alpha_up`, `rho_q`, `rho_p`).
 /// `alpha_other` is the liquid fraction of the other end: the conductance bound is the larger
 /// of the total conductances at the two ends' fractions, so it holds whichever way the flow

@@ -563,3 +563,46 @@ fn non_finite_and_closure_failures_stop_the_step_naming_the_pore() {
         "{e}"
     );
 }
+
+/// The liquid speed of every channel is the liquid mass rate of stage 1 over the upwind
+/// liquid density, layer thickness and width (the same layer), and in channels full of
+/// liquid the plane Poiseuille mean speed `h² |ΔP| / (12 μ L)`.
+#[test]
+fn channel_liquid_speeds_carry_stage_one_liquid_flux() {
+    let (net, mut state) = random_closed_network(7, 24);
+    let cfg = config();
+    for full in [false, true] {
+        if full {
+            state.liquid_fraction.fill(1.0);
+        }
+        let speeds = thm_vpn_flow::stages::channel_liquid_speeds(&net, &state, &cfg);
+        let mut flux = vec![ChannelFlux::default(); net.n_channels()];
+        channel_fluxes(&net, &state, &cfg, &mut flux);
+        let parts = net.parts();
+        let mut checked = 0;
+        for (c, (&v, f)) in speeds.iter().zip(&flux).enumerate() {
+            let [i, j] = parts.channel_pores[c];
+            let (i, j) = (i as usize, j as usize);
+            let up = if state.pressure[i] >= state.pressure[j] {
+                i
+            } else {
+                j
+            };
+            let (h, len) = (parts.channel_aperture[c], parts.channel_length[c]);
+            let layer = state.liquid_fraction[up] * h;
+            if layer == 0.0 {
+                assert_eq!(v, 0.0);
+                continue;
+            }
+            let from_flux = f.liquid.abs() / (state.liquid_density[up] * layer * net.width());
+            assert!((v - from_flux).abs() <= 1e-12 * from_flux.max(1e-30), "{c}");
+            if full {
+                let dp = (state.pressure[i] - state.pressure[j]).abs();
+                let poiseuille = h * h * dp / (12.0 * cfg.liquid_viscosity() * len);
+                assert!((v - poiseuille).abs() <= 1e-12 * poiseuille, "{c}");
+            }
+            checked += 1;
+        }
+        assert!(checked > 10);
+    }
+}
