@@ -581,18 +581,29 @@ pub fn scale_sphere_density(state: &mut PoreScaleState, factor: f64) -> Result<(
 
 /// What case a's summary reports about the crack (A-Sect. 6, A-Figs. 19–22), read from the
 /// state at any time.
+///
+/// The broken bonds are grouped into cracks by height: sorted by the height of their
+/// mid-points, a gap of more than [`CRACK_BAND`] between neighbours starts a new crack. The
+/// macro-crack is the crack with the most broken bonds (the higher one on a tie).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CrackReport {
     /// Bonds broken so far (every break event of the run, tension or shear).
     pub broken_bonds: usize,
     /// Of those, broken in tension.
     pub broken_in_tension: usize,
-    /// Height of the crack: the median height of the broken bonds' mid-points \[m\]
-    /// (NaN before the first break).
+    /// How many cracks the broken bonds form (0 before the first break).
+    pub cracks: usize,
+    /// Height of the macro-crack: the median height of its bonds' mid-points \[m\] (NaN
+    /// before the first break).
     pub crack_height: f64,
-    /// Broken bonds whose mid-point lies within [`CRACK_BAND`] of the crack height: the
-    /// bonds of the macro-crack.
+    /// Broken bonds in the macro-crack.
     pub broken_in_crack: usize,
+    /// Inclination of the macro-crack from the horizontal \[°\], in (−90, 90]: the principal
+    /// axis of its bonds' mid-points (NaN with fewer than two).
+    pub crack_inclination: f64,
+    /// Horizontal extent of the macro-crack's bond mid-points over the bar width (a crack
+    /// across the bar spans most of the width less a sphere).
+    pub crack_span: f64,
     /// Median sphere diameter d50 \[m\] (by number).
     pub d50: f64,
     /// Largest difference of the mean temperatures of two spheres whose bond broke \[K\]:
@@ -600,7 +611,7 @@ pub struct CrackReport {
     pub temperature_step: f64,
 }
 
-/// Half-width of the band around the crack height that counts as the macro-crack \[m\]: half
+/// Largest height gap between the mid-points of the broken bonds of one crack \[m\]: half
 /// the largest sphere diameter of the packing (8 mm).
 pub const CRACK_BAND: f64 = 4e-3;
 
@@ -608,17 +619,31 @@ pub const CRACK_BAND: f64 = 4e-3;
 pub fn crack_report(state: &PoreScaleState) -> CrackReport {
     let dem = &state.dem;
     let p = &dem.particles;
-    let mut heights: Vec<f64> = dem
+    let mut mids: Vec<[f64; 2]> = dem
         .bond_breaks
         .iter()
-        .map(|b| 0.5 * (p.position[b.a as usize].y + p.position[b.b as usize].y))
+        .map(|b| {
+            let (a, c) = (p.position[b.a as usize], p.position[b.b as usize]);
+            [0.5 * (a.x + c.x), 0.5 * (a.y + c.y)]
+        })
         .collect();
-    heights.sort_by(f64::total_cmp);
-    let crack_height = median_sorted(&heights);
-    let broken_in_crack = heights
+    mids.sort_by(|a, b| a[1].total_cmp(&b[1]).then(a[0].total_cmp(&b[0])));
+    // Cracks: runs of mid-points whose heights are within CRACK_BAND of the previous one.
+    let mut cracks: Vec<&[[f64; 2]]> = Vec::new();
+    let mut first = 0;
+    for k in 1..=mids.len() {
+        if k == mids.len() || mids[k][1] - mids[k - 1][1] > CRACK_BAND {
+            cracks.push(&mids[first..k]);
+            first = k;
+        }
+    }
+    let macro_crack: &[[f64; 2]] = cracks
         .iter()
-        .filter(|&&y| (y - crack_height).abs() <= CRACK_BAND)
-        .count();
+        .copied()
+        .filter(|c| !c.is_empty())
+        .max_by_key(|c| c.len())
+        .unwrap_or(&[]);
+    let heights: Vec<f64> = macro_crack.iter().map(|m| m[1]).collect();
     let mut diameters: Vec<f64> = p.radius.iter().map(|r| 2.0 * r).collect();
     diameters.sort_by(f64::total_cmp);
     let temperature_step = dem
@@ -626,6 +651,8 @@ pub fn crack_report(state: &PoreScaleState) -> CrackReport {
         .iter()
         .map(|b| (p.temperature[b.a as usize] - p.temperature[b.b as usize]).abs())
         .fold(0.0, f64::max);
+    let xs = macro_crack.iter().map(|m| m[0]);
+    let span = xs.clone().fold(f64::NEG_INFINITY, f64::max) - xs.fold(f64::INFINITY, f64::min);
     CrackReport {
         broken_bonds: dem.bond_breaks.len(),
         broken_in_tension: dem
@@ -633,11 +660,36 @@ pub fn crack_report(state: &PoreScaleState) -> CrackReport {
             .iter()
             .filter(|b| b.mode == thm_dem::BreakMode::Tension)
             .count(),
-        crack_height,
-        broken_in_crack,
+        cracks: cracks.iter().filter(|c| !c.is_empty()).count(),
+        crack_height: median_sorted(&heights),
+        broken_in_crack: macro_crack.len(),
+        crack_inclination: principal_inclination(macro_crack),
+        crack_span: if macro_crack.is_empty() {
+            f64::NAN
+        } else {
+            span / BAR_WIDTH
+        },
         d50: median_sorted(&diameters),
         temperature_step,
     }
+}
+
+/// Angle of the principal axis of `points` from the x axis \[°\], in (−90, 90] (NaN with
+/// fewer than two points).
+fn principal_inclination(points: &[[f64; 2]]) -> f64 {
+    if points.len() < 2 {
+        return f64::NAN;
+    }
+    let n = points.len() as f64;
+    let [mx, my] = points
+        .iter()
+        .fold([0.0, 0.0], |[x, y], p| [x + p[0] / n, y + p[1] / n]);
+    let [sxx, syy, sxy] = points.iter().fold([0.0; 3], |[a, b, c], p| {
+        let (dx, dy) = (p[0] - mx, p[1] - my);
+        [a + dx * dx, b + dy * dy, c + dx * dy]
+    });
+    let angle = (0.5 * (2.0 * sxy).atan2(sxx - syy)).to_degrees();
+    if angle <= -90.0 { angle + 180.0 } else { angle }
 }
 
 fn median_sorted(v: &[f64]) -> f64 {
@@ -675,4 +727,24 @@ pub fn bar_mesh_params(segments: u32, size: [f64; 2], ends: BarEnds) -> MeshPara
     );
     mesh.side_points = ends == BarEnds::Cut;
     mesh
+}
+
+#[cfg(test)]
+mod tests {
+    use super::principal_inclination;
+
+    #[test]
+    fn principal_inclination_of_points_on_a_line_is_its_angle() {
+        for deg in [-60.0f64, -10.0, 0.0, 25.0, 89.0, 90.0] {
+            let (c, s) = (deg.to_radians().cos(), deg.to_radians().sin());
+            let pts: Vec<[f64; 2]> = (0..7)
+                .map(|k| {
+                    let t = f64::from(k) * 1e-3 - 3e-3;
+                    [0.01 + t * c, 0.07 + t * s]
+                })
+                .collect();
+            assert!((principal_inclination(&pts) - deg).abs() < 1e-9, "{deg}");
+        }
+        assert!(principal_inclination(&[[0.0, 0.0]]).is_nan());
+    }
 }

@@ -265,6 +265,13 @@ impl<F: PoreFluid> PoreScaleStepper<F> {
             .collect()
     }
 
+    /// Mean liquid speed in each channel at the state's pressures \[m/s\]: the liquid
+    /// layer's flow rate over its thickness (`thm_vpn_flow::stages::channel_liquid_speeds`).
+    /// A snapshot of the liquid, unlike [`Self::channel_speeds`] (the step's mean, any phase).
+    pub fn liquid_speeds(&self, state: &PoreScaleState) -> Vec<f64> {
+        thm_vpn_flow::stages::channel_liquid_speeds(&self.network, &state.flow, &self.config.flow)
+    }
+
     /// The fluid force on each sphere applied in the last step \[N\] (x, y).
     pub fn fluid_force(&self) -> &[[f64; 2]] {
         &self.force

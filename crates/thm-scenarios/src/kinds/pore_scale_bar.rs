@@ -234,12 +234,15 @@ impl PoreScaleBar {
                 crack.broken_in_crack as f64,
                 Some(5.0),
             ),
+            row("cracks", "1", crack.cracks as f64, None),
             row(
                 "crack_height_over_bar_length",
                 "1",
                 crack.crack_height / thm_coupling::bar::BAR_LENGTH,
                 None,
             ),
+            row("crack_inclination", "deg", crack.crack_inclination, None),
+            row("crack_span_over_width", "1", crack.crack_span, None),
             row(
                 "largest_bond_tension_before_breakage",
                 "N",
@@ -255,11 +258,15 @@ impl PoreScaleBar {
                 Some(20.9),
             ),
             row(
-                "largest_fluid_speed",
+                "liquid_speed_at_end",
                 "m/s",
-                run.largest_fluid_speed,
+                self.stepper
+                    .liquid_speeds(state)
+                    .into_iter()
+                    .fold(0.0, f64::max),
                 Some(0.0057),
             ),
+            row("largest_fluid_speed", "m/s", run.largest_fluid_speed, None),
             row("liquid_mass", "kg", state.liquid_mass(), None),
             row("gas_mass", "kg", state.gas_mass(), None),
             row("remeshes", "1", state.remeshes as f64, None),
