@@ -49,7 +49,9 @@ pub use checkpoint::{
 };
 pub use csv::{Column, CsvHistory, write_csv};
 pub use error::IoError;
-pub use picture::{FilledPolygon, Picture, Segment, render_picture_png, write_picture_png};
+pub use picture::{
+    ColourBar, FilledPolygon, Picture, Segment, render_picture_png, write_picture_png,
+};
 pub use plot::{render_plot_png, write_plot_csv, write_plot_png};
 pub use pvd::{PvdCollection, PvdFrame, VtuSeries};
 pub use vtu::{CellIndices, Cells, Encoding, Field, FieldValues, Points, UnstructuredGrid};

@@ -36,6 +36,17 @@ pub struct Segment {
     pub colour: Rgb,
 }
 
+/// A colour bar drawn under the picture: how a colour reads as a value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ColourBar {
+    /// What the colours show, with the unit (e.g. `solid temperature [K]`).
+    pub label: String,
+    /// Values at the left and the right end of the bar.
+    pub range: [f64; 2],
+    /// Colours from the left to the right end, drawn as equal bands (at least one).
+    pub colours: Vec<Rgb>,
+}
+
 /// What to draw.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Picture {
@@ -49,6 +60,10 @@ pub struct Picture {
     pub polygons: Vec<FilledPolygon>,
     /// Segments, drawn after the polygons.
     pub segments: Vec<Segment>,
+    /// Colour bars under the drawing, one per row.
+    pub colour_bars: Vec<ColourBar>,
+    /// Length of a scale bar drawn under the drawing \[m\] (labelled in mm), or `None`.
+    pub length_scale: Option<f64>,
 }
 
 /// Margin around the drawing \[px\].
@@ -57,6 +72,14 @@ const MARGIN_PX: u32 = 8;
 const TITLE_PX: u32 = 34;
 /// Largest image side \[px\].
 const MAX_SIDE_PX: u32 = 8192;
+/// Height of one colour bar's row (bar and its labels) \[px\].
+const COLOUR_BAR_PX: u32 = 46;
+/// Height of the bar itself \[px\].
+const BAR_PX: i32 = 14;
+/// Height of the length scale's row \[px\].
+const LENGTH_SCALE_PX: u32 = 30;
+/// Font size of the labels under the drawing \[px\].
+const LABEL_FONT_PX: u32 = 16;
 
 fn colour(c: Rgb) -> RGBColor {
     RGBColor(c[0], c[1], c[2])
@@ -105,7 +128,26 @@ pub fn render_picture_png(picture: &Picture) -> Result<Vec<u8>, IoError> {
         TITLE_PX
     };
     let inner_h = ((hi[1] - lo[1]) * scale).ceil() as u32;
-    let height_px = inner_h + 2 * MARGIN_PX + title_px;
+    for bar in &picture.colour_bars {
+        if bar.colours.is_empty() || !bar.range.iter().all(|v| v.is_finite()) {
+            return Err(err(format!(
+                "colour bar `{}` needs colours and a finite range",
+                bar.label
+            )));
+        }
+    }
+    if let Some(l) = picture.length_scale
+        && !(l.is_finite() && l > 0.0 && l * scale <= inner_w as f64)
+    {
+        return Err(IoError::BadValue {
+            quantity: "length scale [m]",
+            requirement: "positive and at most the drawing's width",
+            value: l,
+        });
+    }
+    let legend_px = picture.colour_bars.len() as u32 * COLOUR_BAR_PX
+        + picture.length_scale.map_or(0, |_| LENGTH_SCALE_PX);
+    let height_px = inner_h + 2 * MARGIN_PX + title_px + legend_px;
     if height_px > MAX_SIDE_PX {
         return Err(IoError::BadValue {
             quantity: "picture height [px]",
@@ -156,6 +198,74 @@ pub fn render_picture_png(picture: &Picture) -> Result<Vec<u8>, IoError> {
             ))
             .map_err(de)?;
         }
+        // The legend: a band under the drawing, as wide as it.
+        let left = MARGIN_PX as i32;
+        let width = inner_w as i32;
+        let mut y = (MARGIN_PX + title_px + inner_h + MARGIN_PX) as i32;
+        if legend_px > 0 {
+            register_font().map_err(err)?;
+            root.draw(&Rectangle::new(
+                [(0, y - MARGIN_PX as i32 / 2), (w as i32, h as i32)],
+                WHITE.filled(),
+            ))
+            .map_err(de)?;
+        }
+        let font = || ("sans-serif", LABEL_FONT_PX).into_font().color(&BLACK);
+        for bar in &picture.colour_bars {
+            let n = bar.colours.len() as i32;
+            for (k, c) in bar.colours.iter().enumerate() {
+                let k = k as i32;
+                let (x0, x1) = (left + width * k / n, left + width * (k + 1) / n);
+                root.draw(&Rectangle::new(
+                    [(x0, y), (x1, y + BAR_PX)],
+                    colour(*c).filled(),
+                ))
+                .map_err(de)?;
+            }
+            root.draw(&Rectangle::new(
+                [(left, y), (left + width, y + BAR_PX)],
+                BLACK,
+            ))
+            .map_err(de)?;
+            let [lo_v, hi_v] = bar.range;
+            let text_y = y + BAR_PX + 2;
+            root.draw(&Text::new(format_value(lo_v), (left, text_y), font()))
+                .map_err(de)?;
+            let hi_text = format_value(hi_v);
+            let hi_w = root.estimate_text_size(&hi_text, &font()).map_err(de)?.0 as i32;
+            root.draw(&Text::new(hi_text, (left + width - hi_w, text_y), font()))
+                .map_err(de)?;
+            let label_w = root.estimate_text_size(&bar.label, &font()).map_err(de)?.0 as i32;
+            root.draw(&Text::new(
+                bar.label.as_str(),
+                (
+                    left + (width - label_w) / 2,
+                    text_y + LABEL_FONT_PX as i32 + 1,
+                ),
+                font(),
+            ))
+            .map_err(de)?;
+            y += COLOUR_BAR_PX as i32;
+        }
+        if let Some(l) = picture.length_scale {
+            let len = (l * scale).round() as i32;
+            let mid = y + 6;
+            root.draw(&PathElement::new(
+                vec![(left, mid), (left + len, mid)],
+                BLACK.stroke_width(3),
+            ))
+            .map_err(de)?;
+            for x in [left, left + len] {
+                root.draw(&PathElement::new(vec![(x, mid - 5), (x, mid + 5)], BLACK))
+                    .map_err(de)?;
+            }
+            root.draw(&Text::new(
+                format!("{} mm", format_value(l * 1e3)),
+                (left + len + 8, mid - LABEL_FONT_PX as i32 / 2),
+                font(),
+            ))
+            .map_err(de)?;
+        }
         root.present().map_err(de)?;
     }
     // The rasteriser blends edges; snapping every pixel to the nearest colour the picture
@@ -168,12 +278,32 @@ pub fn render_picture_png(picture: &Picture) -> Result<Vec<u8>, IoError> {
             .flat_map(|p| std::iter::once(p.fill).chain(p.outline)),
     );
     named.extend(picture.segments.iter().map(|s| s.colour));
+    named.extend(
+        picture
+            .colour_bars
+            .iter()
+            .flat_map(|b| b.colours.iter().copied()),
+    );
     named.sort_unstable();
     named.dedup();
     if named.len() <= 256 {
         snap_to_palette(&mut rgb, &named);
     }
     encode_png(&rgb, w, h).map_err(|e| err(e.to_string()))
+}
+
+/// A legend value with four significant digits, without trailing zeros.
+fn format_value(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let digits = (3 - v.abs().log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.digits$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
 }
 
 /// Replaces every pixel of `rgb` by the nearest colour of `palette` (squared RGB distance).
@@ -275,6 +405,8 @@ mod tests {
             background: [255, 255, 255],
             polygons: vec![square(0.0, [255, 0, 0]), square(1.0, [0, 0, 255])],
             segments: vec![],
+            colour_bars: vec![],
+            length_scale: None,
         };
         let (w, h, rgb) = decode(&render_picture_png(&pic).unwrap());
         assert_eq!(w, 216);
@@ -288,6 +420,59 @@ mod tests {
         assert_eq!(at(MARGIN_PX + 50, mid), [255, 0, 0]);
         assert_eq!(at(MARGIN_PX + 150, mid), [0, 0, 255]);
         assert_eq!(at(2, 2), [255, 255, 255]);
+    }
+
+    /// A colour bar and a length scale go under the drawing: the image grows by their rows,
+    /// the bar's bands lie left to right in order, and the scale bar is as long in pixels as
+    /// its length at the drawing's scale.
+    #[test]
+    fn colour_bar_and_length_scale_sit_under_the_drawing() {
+        let pic = Picture {
+            title: String::new(),
+            width_px: 216,
+            background: [255, 255, 255],
+            polygons: vec![FilledPolygon {
+                corners: vec![[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]],
+                fill: [0, 128, 0],
+                outline: None,
+            }],
+            segments: vec![],
+            colour_bars: vec![ColourBar {
+                label: "temperature [K]".into(),
+                range: [278.16, 368.16],
+                colours: vec![[255, 0, 0], [0, 0, 255]],
+            }],
+            length_scale: Some(0.5),
+        };
+        let (w, h, rgb) = decode(&render_picture_png(&pic).unwrap());
+        assert_eq!(h, 100 + 2 * MARGIN_PX + COLOUR_BAR_PX + LENGTH_SCALE_PX);
+        let at = |x: u32, y: u32| {
+            let i = ((y * w + x) * 3) as usize;
+            [rgb[i], rgb[i + 1], rgb[i + 2]]
+        };
+        let bar_y = 100 + 2 * MARGIN_PX + BAR_PX as u32 / 2;
+        assert_eq!(at(MARGIN_PX + 50, bar_y), [255, 0, 0]);
+        assert_eq!(at(MARGIN_PX + 150, bar_y), [0, 0, 255]);
+        // 0.5 m at 100 px/m: black from the left end to 50 px, white beyond the label's gap.
+        let scale_y = 100 + 2 * MARGIN_PX + COLOUR_BAR_PX + 6;
+        assert_eq!(at(MARGIN_PX + 25, scale_y), [0, 0, 0]);
+        assert_eq!(at(MARGIN_PX + 49, scale_y), [0, 0, 0]);
+        assert_eq!(at(MARGIN_PX + 54, scale_y + 10), [255, 255, 255]);
+        let mut bad = pic.clone();
+        bad.colour_bars[0].colours.clear();
+        assert!(matches!(
+            render_picture_png(&bad),
+            Err(IoError::Plot { .. })
+        ));
+        let mut bad = pic;
+        bad.length_scale = Some(3.0);
+        assert!(matches!(
+            render_picture_png(&bad),
+            Err(IoError::BadValue { .. })
+        ));
+        assert_eq!(format_value(278.16), "278.2");
+        assert_eq!(format_value(0.0116), "0.0116");
+        assert_eq!(format_value(10.0), "10");
     }
 
     /// More than 256 colours fall back to true colour and still decode to the same pixels.
@@ -319,6 +504,8 @@ mod tests {
                 outline: None,
             }],
             segments: vec![],
+            colour_bars: vec![],
+            length_scale: None,
         };
         assert!(matches!(
             render_picture_png(&pic),
@@ -356,6 +543,8 @@ mod tests {
                 ends: [[0.0, 0.0], [1.0, 1.0]],
                 colour: [255, 0, 0],
             }],
+            colour_bars: vec![],
+            length_scale: None,
         };
         write_picture_png(&pic, &path).unwrap();
         let (w, h, _) = decode(&std::fs::read(&path).unwrap());

@@ -118,6 +118,8 @@ pub fn mesh_picture(mesh: &PoreMesh, style: &PictureStyle) -> Picture {
         background: [255, 255, 255],
         polygons,
         segments,
+        colour_bars: Vec::new(),
+        length_scale: None,
     }
 }
 

@@ -335,6 +335,14 @@ const TEMPERATURE_RAMP: [[u8; 3]; 3] = [[49, 54, 149], [255, 255, 191], [165, 0,
 /// Fluid cells by pressure: light grey (low) – purple (high).
 const PRESSURE_RAMP: [[u8; 3]; 2] = [[240, 240, 240], [63, 0, 125]];
 
+/// A ramp sampled at the middles of 40 equal bands: the colour bar of a picture.
+fn ramp_steps(stops: &[[u8; 3]]) -> Vec<[u8; 3]> {
+    const BANDS: u32 = 40;
+    (0..BANDS)
+        .map(|k| ramp(stops, (f64::from(k) + 0.5) / f64::from(BANDS)))
+        .collect()
+}
+
 fn range(v: &[f64]) -> [f64; 2] {
     v.iter()
         .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], &x| {
@@ -810,6 +818,19 @@ impl Scenario for PoreScaleBar {
                 background: [255, 255, 255],
                 polygons,
                 segments,
+                colour_bars: vec![
+                    thm_io::ColourBar {
+                        label: "solid temperature [K]".into(),
+                        range: [t_lo, t_hi],
+                        colours: ramp_steps(&TEMPERATURE_RAMP),
+                    },
+                    thm_io::ColourBar {
+                        label: "pore pressure [kPa]".into(),
+                        range: [p_lo / 1e3, p_hi / 1e3],
+                        colours: ramp_steps(&PRESSURE_RAMP),
+                    },
+                ],
+                length_scale: Some(0.01),
             },
         )]
     }
