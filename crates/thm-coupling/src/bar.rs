@@ -172,9 +172,18 @@ pub const CUT_POROSITY_TARGET: f64 = 0.12;
 pub fn bar_packing_sized(
     seed: u64,
     temperature: f64,
-    [width, length]: [f64; 2],
+    size: [f64; 2],
     ends: BarEnds,
 ) -> Result<DemState, CouplingError> {
+    bar_spheres(seed, size, ends)
+        .to_state(SOLID_DENSITY, temperature)
+        .map_err(CouplingError::Dem)
+}
+
+/// The spheres and bonds of [`bar_packing_sized`] (every overlapping pair bonded), for a
+/// caller that builds its own state from them (the tension test of A-Sect. 3.1 on this
+/// packing, `thm_dem::tension::uniaxial_tension_of`).
+pub fn bar_spheres(seed: u64, [width, length]: [f64; 2], ends: BarEnds) -> Packing {
     let mut spec = PackingSpec::paper_bar(seed);
     spec.box_max = [width, length];
     let circles = match ends {
@@ -209,8 +218,6 @@ pub fn bar_packing_sized(
         radii: circles.iter().map(|c| c.radius).collect(),
         bonds,
     }
-    .to_state(SOLID_DENSITY, temperature)
-    .map_err(CouplingError::Dem)
 }
 
 /// The parameters of `case` on the bar meshed with `segments` points per circle: fixed

@@ -419,19 +419,32 @@ pub fn uniaxial_tension(test: &TensionTest) -> Result<TensionResult, DemError> {
         ..PackingParams::paper_a_bar(test.seed)
     };
     let (packing, _) = random_packing(&params, 2600.0)?;
-    let law = test.law.validate()?;
-    let (y0, y1) = (params.box_min[1], params.box_max[1]);
-    let width = params.box_max[0] - params.box_min[0];
-    let area_porosity = crate::packing::area_porosity(
+    uniaxial_tension_of(
         &packing,
-        [params.box_min[0], y0],
-        [params.box_max[0], y1],
-        AREA_POROSITY_CELL,
-    )?;
-    let (mut bar, mut state) =
-        BarTension::new(&packing, law, 2600.0, &test.loading, y0, y1, width)?;
+        &test.law,
+        &test.loading,
+        [params.box_min[0], params.box_min[1]],
+        [params.box_max[0], params.box_max[1]],
+    )
+}
+
+/// Runs the tension test on a given bonded packing of the bar `[lower, upper]` corners \[m\]
+/// (its spheres may cross the end lines: the grips take every sphere whose surface lies
+/// within the grip depth of an end, or beyond it).
+pub fn uniaxial_tension_of(
+    packing: &crate::packing::Packing,
+    law: &CohesiveFrictionalParams,
+    loading: &BarLoading,
+    lower: [f64; 2],
+    upper: [f64; 2],
+) -> Result<TensionResult, DemError> {
+    let law = law.validate()?;
+    let (y0, y1) = (lower[1], upper[1]);
+    let width = upper[0] - lower[0];
+    let area_porosity = crate::packing::area_porosity(packing, lower, upper, AREA_POROSITY_CELL)?;
+    let (mut bar, mut state) = BarTension::new(packing, law, 2600.0, loading, y0, y1, width)?;
     let dt = bar.time_step();
-    let plate_speed = test.loading.plate_speed;
+    let plate_speed = loading.plate_speed;
     let sample_every = ((1e-6 / plate_speed) / dt).ceil().max(1.0) as u64; // every 1 µm
     let mut result = TensionResult {
         strain: vec![0.0],
