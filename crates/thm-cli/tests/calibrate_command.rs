@@ -80,3 +80,47 @@ fn a_negative_target_is_refused_before_any_run() {
     assert!(!out.status.success());
     assert!(text(&out.stderr).contains("--permeability: must be > 0"));
 }
+
+/// The value on the line of `quantity` in the calibration's result table.
+fn calibrated(stdout: &str, quantity: &str) -> f64 {
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with(quantity))
+        .unwrap_or_else(|| panic!("no {quantity} line in\n{stdout}"));
+    line[quantity.len()..]
+        .split_whitespace()
+        .next()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{line}"))
+}
+
+/// By default `thm calibrate` runs on the coupled bar cases' own packings, and what it finds
+/// is what those cases run with: T and γ within the four digits the constants keep.
+#[test]
+fn the_default_calibration_gives_the_bar_cases_parameters() {
+    let out = thm(&["calibrate"]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
+    assert!(stdout.contains("5 coupled-bar packing(s)"), "{stdout}");
+    let t = calibrated(&stdout, "T [MPa]");
+    let cases_t = thm_coupling::bar::CASE_A_BOND_TENSILE_STRENGTH / 1e6;
+    assert!((t / cases_t - 1.0).abs() < 1e-4, "T {t} vs {cases_t}");
+    let gamma = calibrated(&stdout, "gamma ");
+    let cases_gamma = thm_coupling::bar::BAR_T2T_REDUCTION_FACTOR;
+    assert!(
+        (gamma / cases_gamma - 1.0).abs() < 1e-4,
+        "gamma {gamma} vs {cases_gamma}"
+    );
+}
+
+/// `--packings tension-bar` keeps the calibration on `thm-dem`'s tension bars, whose T is the
+/// one `dem/uniaxial_tension_bar` checks (48.29 MPa).
+#[test]
+fn the_tension_bar_packings_give_their_own_t() {
+    let out = thm(&["calibrate", "--only", "bar", "--packings", "tension-bar"]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
+    assert!(stdout.contains("tension-bar packing(s)"), "{stdout}");
+    let t = calibrated(&stdout, "T [MPa]");
+    assert!((t / 48.29 - 1.0).abs() < 5e-3, "{stdout}");
+}

@@ -153,6 +153,8 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod bar;
+#[cfg(feature = "calibration")]
+pub mod calibration;
 pub mod multiscale;
 pub mod pore_scale;
 

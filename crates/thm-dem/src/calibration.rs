@@ -164,7 +164,14 @@ impl BondCalibration {
 }
 
 /// Runs the tension test on every packing with bond strengths `T`, `ratio · T`.
-fn strength_at(cal: &StrengthCalibration, t: f64) -> Result<StrengthIteration, DemError> {
+fn strength_at<F>(
+    cal: &StrengthCalibration,
+    t: f64,
+    tension: &F,
+) -> Result<StrengthIteration, DemError>
+where
+    F: Fn(u64, &CohesiveFrictionalParams) -> Result<TensionResult, DemError> + Sync,
+{
     let law = CohesiveFrictionalParams {
         tensile_strength: t,
         cohesion: cal.cohesion_ratio * t,
@@ -173,13 +180,7 @@ fn strength_at(cal: &StrengthCalibration, t: f64) -> Result<StrengthIteration, D
     let results = cal
         .seeds
         .par_iter()
-        .map(|&seed| {
-            uniaxial_tension(&TensionTest {
-                seed,
-                law,
-                ..cal.test
-            })
-        })
+        .map(|&seed| tension(seed, &law))
         .collect::<Result<Vec<_>, _>>()?;
     let mean_strength = results.iter().map(|r| r.strength).sum::<f64>() / results.len() as f64;
     Ok(StrengthIteration {
@@ -193,6 +194,26 @@ fn strength_at(cal: &StrengthCalibration, t: f64) -> Result<StrengthIteration, D
 /// Finds the bond tensile strength `T` (with `C = cohesion_ratio · T`) for which the mean
 /// tensile strength of the seeded bar packings equals the target (module docs).
 pub fn calibrate_bond_strength(cal: &StrengthCalibration) -> Result<BondCalibration, DemError> {
+    calibrate_bond_strength_of(cal, |seed, law| {
+        uniaxial_tension(&TensionTest {
+            seed,
+            law: *law,
+            ..cal.test
+        })
+    })
+}
+
+/// [`calibrate_bond_strength`] on another packing family: `tension(seed, law)` runs the
+/// tension test of packing `seed` with bond law `law` (e.g. a coupled case's own packing
+/// through [`crate::tension::uniaxial_tension_of`]); `cal.test` then gives only the first
+/// guess of `T` and the other constants of the law. Deterministic when `tension` is.
+pub fn calibrate_bond_strength_of<F>(
+    cal: &StrengthCalibration,
+    tension: F,
+) -> Result<BondCalibration, DemError>
+where
+    F: Fn(u64, &CohesiveFrictionalParams) -> Result<TensionResult, DemError> + Sync,
+{
     cal.validate()?;
     let [lower, upper] = cal.bracket;
     let target = cal.target_strength;
@@ -204,7 +225,7 @@ pub fn calibrate_bond_strength(cal: &StrengthCalibration) -> Result<BondCalibrat
     let mut side = 0i8;
     let mut t = cal.test.law.tensile_strength.clamp(lower, upper);
     while iterations.len() < cal.max_iterations {
-        let it = strength_at(cal, t)?;
+        let it = strength_at(cal, t, &tension)?;
         let f = it.mean_strength - target;
         iterations.push(it);
         if f.abs() <= tolerance {
@@ -351,7 +372,13 @@ mod tests {
             },
             ..StrengthCalibration::paper_a()
         };
-        let s0 = strength_at(&base, t0).unwrap().mean_strength;
+        // One packing: the mean strength is its strength.
+        let s0 = uniaxial_tension(&TensionTest {
+            seed: 1,
+            ..base.test
+        })
+        .unwrap()
+        .strength;
         let cal = StrengthCalibration {
             target_strength: 2.0 * s0,
             ..base

@@ -221,37 +221,56 @@ pub const GAMMA_MAX: f64 = 1.0;
 /// Finds the γ at which the geometric mean of κ over the packings equals the target (module
 /// docs): the root of `f(x) = ln κ(eˣ) − ln target` (κ grows monotonically with γ).
 pub fn calibrate_t2t_factor(cal: &PermeabilityCalibration) -> Result<T2tCalibration, FlowError> {
+    calibrate_t2t_factor_of(cal, |seed, gamma| cal.test.bar_permeability(seed, gamma))
+}
+
+/// [`calibrate_t2t_factor`] on another packing family: `permeability(seed, gamma)` meshes
+/// packing `seed` with T2T reduction factor `gamma` and measures its κ (e.g. a coupled case's
+/// own bar mesh); `cal.test` is then not used. The error type is the caller's, so that its
+/// meshing errors pass through unchanged.
+pub fn calibrate_t2t_factor_of<E, F>(
+    cal: &PermeabilityCalibration,
+    mut permeability: F,
+) -> Result<T2tCalibration, E>
+where
+    E: From<FlowError>,
+    F: FnMut(u64, f64) -> Result<BarPermeability, E>,
+{
     let target = cal.target_permeability;
     if !(target > 0.0 && target.is_finite()) {
         return Err(FlowError::OutOfRange {
             name: "target_permeability",
             range: "> 0 m^2 and finite",
             value: target,
-        });
+        }
+        .into());
     }
     if !(cal.initial_gamma > 0.0 && cal.initial_gamma <= GAMMA_MAX) {
         return Err(FlowError::OutOfRange {
             name: "initial_gamma",
             range: "in (0, 1]",
             value: cal.initial_gamma,
-        });
+        }
+        .into());
     }
     if !(cal.relative_tolerance > 0.0 && cal.relative_tolerance < 0.5) {
         return Err(FlowError::OutOfRange {
             name: "relative_tolerance",
             range: "in (0, 0.5)",
             value: cal.relative_tolerance,
-        });
+        }
+        .into());
     }
     if cal.seeds.is_empty() {
         return Err(FlowError::OutOfRange {
             name: "seeds",
             range: "at least one packing seed",
             value: 0.0,
-        });
+        }
+        .into());
     }
     let mut iterations: Vec<PermeabilityIteration> = Vec::new();
-    let eval = |x: f64, iterations: &mut Vec<PermeabilityIteration>| -> Result<f64, FlowError> {
+    let mut eval = |x: f64, iterations: &mut Vec<PermeabilityIteration>| -> Result<f64, E> {
         if iterations.len() >= cal.max_iterations {
             let last = &iterations[iterations.len() - 1];
             return Err(FlowError::CalibrationNotConverged {
@@ -261,7 +280,8 @@ pub fn calibrate_t2t_factor(cal: &PermeabilityCalibration) -> Result<T2tCalibrat
                 iterations: iterations.len(),
                 gamma: last.gamma,
                 value: last.kappa,
-            });
+            }
+            .into());
         }
         // The first guess exactly as given (exp(ln γ) may differ from γ in the last bit).
         let gamma = if x == cal.initial_gamma.ln() {
@@ -271,9 +291,9 @@ pub fn calibrate_t2t_factor(cal: &PermeabilityCalibration) -> Result<T2tCalibrat
         };
         let mut kappas = Vec::with_capacity(cal.seeds.len());
         for &seed in &cal.seeds {
-            let k = cal.test.bar_permeability(seed, gamma)?;
+            let k = permeability(seed, gamma)?;
             if !k.percolates {
-                return Err(FlowError::NoPorePath { seed });
+                return Err(FlowError::NoPorePath { seed }.into());
             }
             kappas.push(k.kappa);
         }
@@ -311,14 +331,14 @@ pub fn calibrate_t2t_factor(cal: &PermeabilityCalibration) -> Result<T2tCalibrat
     let (mut f_lo, mut f_hi) = (f0, f0);
     while f_lo > 0.0 {
         if lo <= x_min {
-            return Err(unreachable(&iterations, x_min.exp(), GAMMA_MAX));
+            return Err(unreachable(&iterations, x_min.exp(), GAMMA_MAX).into());
         }
         lo = (lo - 2f64.ln()).max(x_min);
         f_lo = eval(lo, &mut iterations)?;
     }
     while f_hi < 0.0 {
         if hi >= x_max {
-            return Err(unreachable(&iterations, x_min.exp(), GAMMA_MAX));
+            return Err(unreachable(&iterations, x_min.exp(), GAMMA_MAX).into());
         }
         hi = (hi + 2f64.ln()).min(x_max);
         f_hi = eval(hi, &mut iterations)?;

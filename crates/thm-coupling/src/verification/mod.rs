@@ -24,6 +24,10 @@
 //!    remeshes come later, `coupling/bar_contraction_free` goes through 123): both phase masses kept to 10⁻¹² at the end of
 //!    every 0.01 s, every temperature between the ends' 278.16 K and the initial 368.16 K.
 //!
+//! 6. `coupling/bar_packing_family` (A-Sect. 3, quick): the packings every bar case runs on,
+//!    against the paper's strength and permeability at the cases' calibrated T and γ
+//!    ([`family`]).
+//!
 //! 3. `coupling/bar_cooling_advection` (A-Sects. 4–5, not quick): the bar with every sphere
 //!    held and single-phase water, cooled by 30 K for 400 s without flow and with 0.9 and
 //!    9.9 MPa across: the liquid mass changes only by the reservoirs' inflow (10⁻¹²), the
@@ -34,6 +38,7 @@
 
 pub mod biaxial;
 pub mod column;
+pub mod family;
 pub mod multiscale;
 pub mod silo;
 
@@ -82,6 +87,12 @@ pub fn cases() -> Vec<Case> {
         description: "A-Sect. 6 case a, 17 s: bar of A-Fig. 8 with the end spheres held, calibrated bonds, free to contract and crack: phase masses and temperature bounds through every break and remesh, the paper's crack and fluid figures",
         quick: false,
         run: contraction_free_case,
+    });
+    cases.push(Case {
+        name: "coupling/bar_packing_family",
+        description: "A-Sect. 3 on the coupled bar cases' own packings (cut ends, overlap bonds): strength at the cases' T and permeability at their gamma against the paper's 8.8 MPa and 2.47e-16 m^2, porosity and sizes of the recipe, no sealed pore",
+        quick: true,
+        run: family::packing_family_case,
     });
     cases.push(Case {
         name: "coupling/bar_contraction_free_start",
