@@ -24,7 +24,7 @@ use thm_vpn_flow::permeability::{
 };
 
 use crate::bar::{
-    BAR_LENGTH, BAR_WIDTH, BarCase, BarEnds, PAPER_BAR, bar_mesh_params, bar_params_sized,
+    BarCase, BarEnds, PAPER_BAR, bar_mesh_params, bar_params_sized,
     bar_spheres, bar_state_sized, water_air,
 };
 use crate::pore_scale::CouplingError;
@@ -32,6 +32,8 @@ use crate::pore_scale::CouplingError;
 /// A packing family of the A-Fig. 8 bar: its ends and how its pore mesh is made.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BarFamily {
+    /// The bar's `[width, length]` \[m\] (A-Fig. 8: 20 × 80 mm).
+    pub size: [f64; 2],
     /// How the bar's ends are made (cut from a longer packing, or every sphere inside).
     pub ends: BarEnds,
     /// Points per circle of the pore mesh (the permeability only).
@@ -48,6 +50,7 @@ impl BarFamily {
     pub fn coupled_cases() -> Self {
         let mesh = bar_mesh_params(32, PAPER_BAR, BarEnds::Cut);
         Self {
+            size: PAPER_BAR,
             ends: BarEnds::Cut,
             segments: 32,
             snap_tolerance: mesh.snap_tolerance,
@@ -62,8 +65,8 @@ impl BarFamily {
         seed: u64,
         law: &CohesiveFrictionalParams,
     ) -> Result<TensionResult, DemError> {
-        let packing = bar_spheres(seed, PAPER_BAR, self.ends);
-        uniaxial_tension_of(&packing, law, &BarLoading::paper_a(), [0.0; 2], PAPER_BAR)
+        let packing = bar_spheres(seed, self.size, self.ends);
+        uniaxial_tension_of(&packing, law, &BarLoading::paper_a(), [0.0; 2], self.size)
     }
 
     /// The Darcy permeability (A-Eq. 56) of packing `seed`'s pore network as the cases mesh
@@ -76,18 +79,23 @@ impl BarFamily {
         test: &DarcyTest,
     ) -> Result<BarPermeability, CouplingError> {
         let case = BarCase::Cooling;
-        let mut params = bar_params_sized(case, self.segments, PAPER_BAR, self.ends);
+        let mut params = bar_params_sized(case, self.segments, self.size, self.ends);
         params.mesh.t2t_reduction_factor = gamma;
         params.mesh.snap_tolerance = self.snap_tolerance;
         params.mesh.narrow_gap_length = self.narrow_gap_length;
         params.boundary_reduction_factor = gamma;
         let config = params.validate()?;
-        let state = bar_state_sized(case, &config, seed, &water_air(), PAPER_BAR, self.ends)?;
+        let state = bar_state_sized(case, &config, seed, &water_air(), self.size, self.ends)?;
         let mesh = &state.mesh.mesh;
         let net = Network::from_mesh(mesh, &test.reservoirs(), gamma)?;
         let steady = incompressible_steady_flow(&net, test.viscosity)?;
         Ok(BarPermeability {
-            kappa: test.kappa_of_rate(steady.group_rate[1], BAR_LENGTH, BAR_WIDTH, mesh.thickness),
+            kappa: test.kappa_of_rate(
+                steady.group_rate[1],
+                self.size[1],
+                self.size[0],
+                mesh.thickness,
+            ),
             percolates: steady.percolates,
         })
     }
@@ -118,11 +126,11 @@ impl BarFamily {
     /// enclosed by solid ([`crate::pore_scale::unconnected_pores`]).
     pub fn sealed_pores(&self, seed: u64) -> Result<usize, CouplingError> {
         let case = BarCase::Cooling;
-        let mut params = bar_params_sized(case, self.segments, PAPER_BAR, self.ends);
+        let mut params = bar_params_sized(case, self.segments, self.size, self.ends);
         params.mesh.snap_tolerance = self.snap_tolerance;
         params.mesh.narrow_gap_length = self.narrow_gap_length;
         let config = params.validate()?;
-        let state = bar_state_sized(case, &config, seed, &water_air(), PAPER_BAR, self.ends)?;
+        let state = bar_state_sized(case, &config, seed, &water_air(), self.size, self.ends)?;
         let stepper = crate::pore_scale::PoreScaleStepper::new(config, water_air(), &state)?;
         Ok(crate::pore_scale::unconnected_pores(stepper.network()))
     }
@@ -130,7 +138,7 @@ impl BarFamily {
     /// Median sphere diameter d50 of packing `seed` (by number) \[m\] and the smallest and
     /// largest diameters.
     pub fn diameters(&self, seed: u64) -> [f64; 3] {
-        let mut d: Vec<f64> = bar_spheres(seed, PAPER_BAR, self.ends)
+        let mut d: Vec<f64> = bar_spheres(seed, self.size, self.ends)
             .radii
             .iter()
             .map(|r| 2.0 * r)

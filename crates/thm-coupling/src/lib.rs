@@ -107,6 +107,11 @@
 //! 4.5 minutes on two cores, both phase masses kept to 10⁻¹² through 144 remeshes
 //! (`coupling/bar_contraction_free`, `docs/cases/bar_contraction_free.md`).
 //!
+//! The bar cases' bond strength and T2T reduction factor are calibrated on the packings they
+//! run on (A-Sect. 3; [`bar::CASE_A_BOND_TENSILE_STRENGTH`], [`bar::BAR_T2T_REDUCTION_FACTOR`];
+//! with the feature `calibration`, `calibration::BarFamily` runs the tension and Darcy tests
+//! of that family for `thm calibrate`).
+//!
 //! Temperatures stay between the ends' 278.16 K and the initial 368.16 K in case a (checked
 //! by a `thm run` test through bond breakage). An earlier reading of "fluid cells cooling
 //! below the boundary temperature" compared them with the 293.16 K ends of A-Sects. 4–5;
