@@ -182,20 +182,29 @@ fn main() {
         "| bar width × length [mm] | film ends (the Darcy test's meshes): median κ [1e-16 m²] | percolating | cut ends: median κ | percolating | cut / film |"
     );
     println!("| --- | --- | --- | --- | --- | --- |");
-    for (w, l) in [(1.0, 1.0), (1.0, 2.0), (1.0, 4.0), (2.0, 1.0), (2.0, 2.0), (4.0, 4.0)] {
+    for (w, l) in [
+        (1.0, 1.0),
+        (1.0, 2.0),
+        (1.0, 4.0),
+        (2.0, 1.0),
+        (2.0, 2.0),
+        (4.0, 4.0),
+    ] {
         let size = [w * BAR_WIDTH, l * BAR_LENGTH];
         let mut cells = Vec::new();
         let mut medians = Vec::new();
         for ends in [BarEnds::Film, BarEnds::Cut] {
             let mut k: Vec<f64> = seeds
                 .iter()
-                .filter_map(|&seed| match coupled_kappa_at(&test, seed, ends, None, size) {
-                    Ok(k) => Some(k.max(0.0)),
-                    Err(e) => {
-                        eprintln!("{ends:?} seed {seed}, {size:?}: {e}");
-                        None
-                    }
-                })
+                .filter_map(
+                    |&seed| match coupled_kappa_at(&test, seed, ends, None, size) {
+                        Ok(k) => Some(k.max(0.0)),
+                        Err(e) => {
+                            eprintln!("{ends:?} seed {seed}, {size:?}: {e}");
+                            None
+                        }
+                    },
+                )
                 .collect();
             k.sort_by(f64::total_cmp);
             let n = k.len();
@@ -219,4 +228,3 @@ fn main() {
         );
     }
 }
-

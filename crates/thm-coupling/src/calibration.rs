@@ -24,8 +24,8 @@ use thm_vpn_flow::permeability::{
 };
 
 use crate::bar::{
-    BarCase, BarEnds, PAPER_BAR, bar_mesh_params, bar_params_sized,
-    bar_spheres, bar_state_sized, water_air,
+    BarCase, BarEnds, PAPER_BAR, bar_mesh_params, bar_params_sized, bar_spheres, bar_state_sized,
+    water_air,
 };
 use crate::pore_scale::CouplingError;
 
