@@ -119,8 +119,9 @@
 //! the cooled ends. What did break the bound was two-phase advection: a channel carried
 //! heat with the upwind pore's mixture `c_p` while the pores' capacities changed by each
 //! phase's own mass and `c_p`, so a uniform field drifted (3·10⁻⁵ K above 368.16 K within
-//! 0.03 s of case a); a channel now advects the capacity the pores exchanged
-//! ([`pore_scale::stages::advected_specific_heat`]).
+//! 0.03 s of case a); a channel now advects the capacity the pores exchanged, from the side
+//! it came from where sub-steps moved the phases opposite ways
+//! ([`pore_scale::stages::advected_transfer`]).
 //!
 //! The out-of-plane thickness (cell volume = area × thickness) is the largest diameter of the
 //! initial packing (A-Sect. 2.4) and stays for the run: a remesh used to take the largest

@@ -526,7 +526,7 @@ fn overfilled_pores_spill_to_their_neighbours_conserving_mass_and_energy() {
 /// keeps it to 10⁻⁹ K. Water and air have different `c_p`, and the pores exchange the phases
 /// in other proportions than the upwind pore holds at the end of the step, so this holds only
 /// when a channel advects the heat capacity that the pores exchanged
-/// (`stages::advected_specific_heat`); with the upwind pore's mixture value a cell drifted by
+/// (`stages::advected_transfer`); with the upwind pore's mixture value a cell drifted by
 /// 8.9·10⁻⁴ K in these 20 steps. (The explicit heat step re-expresses the temperature at the
 /// new capacity before its sub-steps, so it keeps the energy but not a uniform field: 0.52 K
 /// here; see `stages::heat_stage`.)
@@ -582,5 +582,25 @@ fn a_uniform_temperature_stays_uniform_while_both_phases_flow() {
             worst <= 1e-9,
             "{scheme:?}: a cell moved {worst} K from {t0} K"
         );
+    }
+}
+
+proptest::proptest! {
+    /// A channel advects the heat capacity the two pores exchanged, `M_q c_q + M_p c_p`, with
+    /// a specific heat between the phases' and, where the phases moved opposite ways, from the
+    /// side that capacity came from (`stages::advected_transfer`).
+    #[test]
+    fn a_channel_advects_the_capacity_the_pores_exchanged(
+        liquid in -1e-6f64..1e-6,
+        gas in -1e-6f64..1e-6,
+    ) {
+        use thm_coupling::pore_scale::stages::advected_transfer;
+        let (c_q, c_p) = (4181.3, 1006.0);
+        let (mass, c) = advected_transfer(liquid + gas, liquid, [c_q, c_p]);
+        let exchanged = liquid * c_q + gas * c_p;
+        let scale = liquid.abs() * c_q + gas.abs() * c_p;
+        proptest::prop_assert!((mass * c - exchanged).abs() <= 1e-12 * scale.max(f64::MIN_POSITIVE));
+        proptest::prop_assert!((c_p..=c_q).contains(&c));
+        proptest::prop_assert!(mass * exchanged >= 0.0);
     }
 }
