@@ -271,7 +271,7 @@ def test_ctrl_c_stops_after_the_step_with_a_checkpoint(thm_bin, tmp_path):
     time.sleep(1.0)
     child.send_signal(signal.SIGINT)
     out, err = child.communicate(timeout=60)
-    assert child.returncode == 130, err
+    assert child.returncode == 130, (out, err)
     m = re.search(r"INTERRUPTED (\d+) stopped after step (\d+); checkpoint (\S+)", out)
     assert m, out
     k = int(m.group(1))
