@@ -24,6 +24,15 @@ pub struct MpmParameters {
     /// Particle damping `α_p ∈ [0, 1]` of B-Eqs. 26–27.
     #[serde(default)]
     pub particle_damping: f64,
+    /// Local non-viscous damping `α_l ∈ [0, 1)` of the nodal forces (Cundall's local damping
+    /// carried to the grid): each component of a node's force (internal, external and
+    /// gravity) is reduced by `α_l |f_i|` against the node's velocity, `f_i − α_l |f_i|
+    /// sgn(v_i)`. Unlike B-Eq. 26's `α_g` and `α_p`, which damp the velocity itself and so
+    /// resist a steady motion, it removes energy only while the forces are out of balance:
+    /// the choice for quasi-static loading. Not in the paper; 0 (the default) leaves the
+    /// update as B-Eqs. 20–22.
+    #[serde(default)]
+    pub local_damping: f64,
     /// The factor `b > 0` of the thermal time-step limit B-Eq. 31 (paper default 1).
     #[serde(default = "one")]
     pub thermal_time_step_factor: f64,
@@ -60,6 +69,7 @@ impl MpmParameters {
             pic_fraction: 0.0,
             grid_damping: 0.0,
             particle_damping: 0.0,
+            local_damping: 0.0,
             thermal_time_step_factor: 1.0,
             node_mass_tolerance: 0.0,
             gravity: [0.0; 2],
@@ -125,6 +135,14 @@ impl MpmConfig {
         unit_interval("pic_fraction", params.pic_fraction)?;
         unit_interval("grid_damping", params.grid_damping)?;
         unit_interval("particle_damping", params.particle_damping)?;
+        let ld = params.local_damping;
+        if !(0.0..1.0).contains(&ld) {
+            return Err(MpmError::InvalidParameter {
+                name: "local_damping".into(),
+                value: ld,
+                allowed: "[0, 1)",
+            });
+        }
         let b = params.thermal_time_step_factor;
         if !(b.is_finite() && b > 0.0) {
             return Err(MpmError::InvalidParameter {

@@ -33,6 +33,11 @@
 //!   finite share of the point's internal force, so its velocity blows up; nodes with mass at
 //!   most `MpmParameters::node_mass_tolerance` are left out of the velocity update (velocity
 //!   0). The default 0 updates every node with mass.
+//! * Local non-viscous damping of the nodal forces (`MpmParameters::local_damping`, not in the
+//!   paper): each force component is reduced by `α_l |f_i|` against the node's velocity, so it
+//!   removes energy while the forces are out of balance and leaves a steady motion alone
+//!   (B-Eq. 26's `α_g` and `α_p` damp the velocity itself). Nodes a wall holds are not damped,
+//!   so wall reactions stay the undamped forces. The default 0 is B-Eqs. 20–22 unchanged.
 //! * The constitutive seam [`Constitutive`]: a point hands `L`, `F`, remapped `T`, `Ṫ`, `σ`, ρ
 //!   and `Δt` to its material and gets back `σ`, a heat source `Q_t` (W/m³) and a 2 × 2
 //!   conductivity tensor; per-point history (`PointState`) lives in the caller's [`MpmState`].

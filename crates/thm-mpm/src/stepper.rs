@@ -546,6 +546,7 @@ struct UpdateInputs<'a> {
     walls: &'a [RigidWall],
     gravity: [f64; 2],
     node_mass_tolerance: f64,
+    local_damping: f64,
     dt: f64,
     time: f64,
 }
@@ -588,10 +589,27 @@ fn update_row(
         let (v0, v1) = if s.mass > inp.node_mass_tolerance {
             let inv_m = 1.0 / s.mass;
             let mut v0 = [s.momentum[0] * inv_m, s.momentum[1] * inv_m];
-            let mut v1 = [
-                v0[0] + (s.force[0] * inv_m + gravity[0]) * dt,
-                v0[1] + (s.force[1] * inv_m + gravity[1]) * dt,
-            ];
+            let x = inp.grid.node_position(i, j);
+            // A node a wall holds is not damped: the wall's reaction is its undamped force.
+            let mut v1 = if inp.local_damping > 0.0 && !inp.walls.iter().any(|w| w.acts_on(x, time))
+            {
+                let a = inp.local_damping;
+                let mut f = [
+                    s.force[0] + s.mass * gravity[0],
+                    s.force[1] + s.mass * gravity[1],
+                ];
+                for (f, v) in f.iter_mut().zip(v0) {
+                    if v != 0.0 {
+                        *f -= a * f.abs() * v.signum();
+                    }
+                }
+                [v0[0] + f[0] * inv_m * dt, v0[1] + f[1] * inv_m * dt]
+            } else {
+                [
+                    v0[0] + (s.force[0] * inv_m + gravity[0]) * dt,
+                    v0[1] + (s.force[1] * inv_m + gravity[1]) * dt,
+                ]
+            };
             if mask[i] & 1 != 0 {
                 v0[0] = 0.0;
                 v1[0] = 0.0;
@@ -600,7 +618,6 @@ fn update_row(
                 v0[1] = 0.0;
                 v1[1] = 0.0;
             }
-            let x = inp.grid.node_position(i, j);
             for (wall, r) in inp.walls.iter().zip(row.reactions.iter_mut()) {
                 if wall.acts_on(x, time) {
                     let c = wall.constrain(v1);
@@ -1393,6 +1410,7 @@ impl Mpm {
             walls,
             gravity: self.config.params.gravity,
             node_mass_tolerance: self.config.params.node_mass_tolerance,
+            local_damping: self.config.params.local_damping,
             dt,
             time,
         });
@@ -1487,6 +1505,7 @@ impl Mpm {
             walls: &self.config.params.walls,
             gravity: self.config.params.gravity,
             node_mass_tolerance: self.config.params.node_mass_tolerance,
+            local_damping: self.config.params.local_damping,
             dt,
             time,
         };

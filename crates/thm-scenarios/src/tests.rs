@@ -1150,6 +1150,36 @@ track = [[0.25, 0.5]]
         let text = BIAXIAL.replace("disks = 30", "disks = 30\ncolour = 1");
         let err = error_of("mpm_biaxial_unknown", &text);
         assert!(err.contains("colour"), "{err}");
+        for field in ["rve_local_damping", "mpm_local_damping"] {
+            let text = BIAXIAL.replace("disks = 30", &format!("disks = 30\n{field} = 1.0"));
+            let err = error_of("mpm_biaxial_damping", &text);
+            assert!(
+                err.contains(&format!("biaxial.{field}: must be in [0, 1), got 1")),
+                "{err}"
+            );
+        }
+        let text = BIAXIAL.replace(
+            "disks = 30",
+            "disks = 30\nquasi_static = { max_inertial_number = 2.0, max_kinetic_ratio = 1e-2 }",
+        );
+        let err = error_of("mpm_biaxial_qs_range", &text);
+        assert!(err.contains("quasi_static.max_inertial_number"), "{err}");
+    }
+
+    /// Quasi-statics enforced: an inertial-number bound below what the plate's start gives
+    /// stops the run at the first step past it, naming the point, the step and the
+    /// quantity, with the history written so far kept.
+    #[test]
+    fn an_rve_past_the_quasi_static_bound_stops_the_run_naming_it() {
+        let text = BIAXIAL.replace(
+            "disks = 30",
+            "disks = 30\nquasi_static = { max_inertial_number = 1e-9, max_kinetic_ratio = 1.0 }",
+        );
+        let err = error_of("mpm_biaxial_qs", &text);
+        assert!(
+            err.contains("point") && err.contains("step") && err.contains("inertial number"),
+            "{err}"
+        );
     }
 }
 

@@ -160,6 +160,10 @@ pub struct BiaxialTest {
     pub pic_fraction: f64,
     /// Grid damping α_g of B-Eq. 26 (not stated for this case).
     pub grid_damping: f64,
+    /// Local non-viscous damping of the nodal forces (`thm_mpm::MpmParameters::local_damping`,
+    /// not in the paper), in [0, 1); 0: none.
+    #[serde(default)]
+    pub mpm_local_damping: f64,
     /// Node mass tolerance of `thm-mpm` as a fraction of a point's mass, in [0, 1]: nodes
     /// with less mass are left out of the velocity update (the small-mass problem at the
     /// bulging sides, see the module docs).
@@ -209,6 +213,7 @@ impl BiaxialTest {
             conductivity: 1.6,
             pic_fraction: 0.1,
             grid_damping: 0.0,
+            mpm_local_damping: 0.0,
             node_mass_fraction: 0.01,
             rve: RveParams::paper_b_table_1(),
             dem_time: DemTimeRule {
@@ -448,6 +453,45 @@ pub struct BiaxialRecord {
     /// RVEs without pressure or contact energy (their inertial number or kinetic ratio is
     /// infinite: the cell has dilated until no contact carries force).
     pub rves_without_pressure: usize,
+    /// Where the largest inertial number of any RVE sits, an infinite one included.
+    #[serde(default)]
+    pub max_inertial_at: PointPlace,
+    /// Where the largest kinetic/elastic energy ratio of any RVE sits, an infinite one
+    /// included.
+    #[serde(default)]
+    pub max_kinetic_at: PointPlace,
+}
+
+/// A material point and its position at a record: where a measure peaks.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct PointPlace {
+    /// Point index.
+    pub point: usize,
+    /// Its position (m).
+    pub position: [f64; 2],
+    /// The measure's value there.
+    pub value: f64,
+}
+
+impl PointPlace {
+    /// The point of largest `value(p)` (NaN above +inf, the first of equals), with its
+    /// position; point 0 with value 0 when there is none.
+    pub fn largest(positions: &[[f64; 2]], value: impl Fn(usize) -> f64) -> Self {
+        let mut best = Self::default();
+        let mut first = true;
+        for (p, x) in positions.iter().enumerate() {
+            let v = value(p);
+            if first || v.total_cmp(&best.value).is_gt() {
+                best = Self {
+                    point: p,
+                    position: *x,
+                    value: v,
+                };
+                first = false;
+            }
+        }
+        best
+    }
 }
 
 /// The biaxial test as a case of the multiscale skeleton: its parameters, what the
@@ -499,6 +543,7 @@ impl MultiscaleModel<Biaxial> {
         });
         params.pic_fraction = t.pic_fraction;
         params.grid_damping = t.grid_damping;
+        params.local_damping = t.mpm_local_damping;
         let dx = h / t.points_per_cell as f64;
         params.node_mass_tolerance = t.node_mass_fraction * report.bulk_density * dx * dx;
         params.walls = vec![
@@ -718,6 +763,31 @@ impl Protocol for Biaxial {
             max_inertial_number: inertial,
             max_kinetic_ratio: kinetic,
             rves_without_pressure: loose_rves,
+            max_inertial_at: PointPlace::largest(&pts.position, |p| {
+                state.material[p].inertial_number.abs()
+            }),
+            max_kinetic_at: PointPlace::largest(&pts.position, |p| {
+                state.material[p].kinetic_ratio.abs()
+            }),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PointPlace;
+
+    /// The history names the RVE in free flight (infinite ratio) before any finite one, a
+    /// NaN above both, and the first of equal values.
+    #[test]
+    fn the_largest_measure_names_its_point_and_place() {
+        let x = [[0.0, 0.0], [1.0, 0.5], [0.5, 2.0], [0.25, 1.0]];
+        let at = PointPlace::largest(&x, |p| [0.1, f64::INFINITY, 0.3, f64::INFINITY][p]);
+        assert_eq!((at.point, at.position), (1, [1.0, 0.5]));
+        let at = PointPlace::largest(&x, |p| [0.1, f64::INFINITY, f64::NAN, 0.0][p]);
+        assert_eq!(at.point, 2);
+        let at = PointPlace::largest(&x, |_| 0.2);
+        assert_eq!((at.point, at.value), (0, 0.2));
+        assert_eq!(PointPlace::largest(&[], |_| 1.0), PointPlace::default());
     }
 }

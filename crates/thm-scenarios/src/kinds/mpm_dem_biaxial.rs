@@ -14,10 +14,10 @@
 //! (grid, plates, consolidated template) is rebuilt from the parameters on resume.
 
 use serde::{Deserialize, Serialize};
-use thm_coupling::multiscale::RvePoint;
 use thm_coupling::multiscale::biaxial::{
     Biaxial, BiaxialModel, BiaxialRecord, BiaxialTest, BiaxialTotals, Compaction,
 };
+use thm_coupling::multiscale::{QuasiStaticLimits, RvePoint};
 use thm_io::{Column, FieldValues, IoError, UnstructuredGrid};
 use thm_mpm::MpmState;
 
@@ -62,6 +62,19 @@ pub struct BiaxialParams {
     /// μ_b of B-Eq. 39 (the paper: 0.5), in [1e-6, 1e6].
     #[serde(default = "half")]
     pub bond_shear_ratio: f64,
+    /// Local damping of the RVE disks' motion (`thm_rve::RveParams::local_damping`), in
+    /// [0, 1); the paper states none: 0.
+    #[serde(default)]
+    pub rve_local_damping: f64,
+    /// Local non-viscous damping of the MPM nodal forces
+    /// (`thm_mpm::MpmParameters::local_damping`), in [0, 1); not in the paper: 0.
+    #[serde(default)]
+    pub mpm_local_damping: f64,
+    /// Quasi-static bounds checked after every step (`max_inertial_number`,
+    /// `max_kinetic_ratio`, each in (0, 1]): the run stops at the first RVE above one,
+    /// naming the point, the step and the quantity. Default: measured, not enforced.
+    #[serde(default)]
+    pub quasi_static: Option<QuasiStaticLimits>,
     /// Material points whose RVEs are written at every frame (disks, contact forces, cell;
     /// series `rve_K_disks`, `rve_K_contacts`, `rve_K_cell`): the point nearest to each
     /// `[x, y]` (m) of the specimen as built, at most 16, each inside it. Default: none.
@@ -180,6 +193,20 @@ impl MultiscaleKind for BiaxialOutputs {
         check_range("biaxial.bond_shear_ratio", b.bond_shear_ratio, 1e-6, 1e6)?;
         t.bond_strength = b.bond_strength;
         t.bond_shear_ratio = b.bond_shear_ratio;
+        for (field, v) in [
+            ("biaxial.rve_local_damping", b.rve_local_damping),
+            ("biaxial.mpm_local_damping", b.mpm_local_damping),
+        ] {
+            if !(0.0..1.0).contains(&v) {
+                return Err(ConfigError::new(
+                    field,
+                    format!("must be in [0, 1), got {v}"),
+                ));
+            }
+        }
+        t.rve.local_damping = b.rve_local_damping;
+        t.mpm_local_damping = b.mpm_local_damping;
+        t.quasi_static = b.quasi_static;
         t.seed = b.seed;
         t.confining_stress = b.confining_stress.si();
         t.plate_speed = b.plate_speed.si();
@@ -271,6 +298,12 @@ impl MultiscaleKind for BiaxialOutputs {
             Column::new("largest_rve_kinetic_ratio", "-"),
             Column::new("rves_without_pressure", "-"),
             Column::new("intact_bonds", "-"),
+            Column::new("largest_inertial_number_point", "-"),
+            Column::new("largest_inertial_number_x", "m"),
+            Column::new("largest_inertial_number_y", "m"),
+            Column::new("largest_kinetic_ratio_point", "-"),
+            Column::new("largest_kinetic_ratio_x", "m"),
+            Column::new("largest_kinetic_ratio_y", "m"),
         ]
     }
 
@@ -294,6 +327,9 @@ impl MultiscaleKind for BiaxialOutputs {
             r.rves_without_pressure as f64,
             intact_bonds(&state.mpm) as f64,
         ]);
+        for at in [r.max_inertial_at, r.max_kinetic_at] {
+            values.extend([at.point as f64, at.position[0], at.position[1]]);
+        }
     }
 
     fn frame(
