@@ -741,3 +741,58 @@ fn square_without_friction_heat_reports_but_does_not_apply_it() {
     }
     assert!(work > 0.0);
 }
+
+/// The TM-MPM twin of the rod (B-Fig. 9(a–c)) follows B-Eqs. 55–57 with `K = E`: at 0.4 s
+/// (the paper's "quasi-static after 0.4 s") the temperature within 0.5 °C, the stress change
+/// within 3 % of `E β ΔT` and the displacement within 3 % of `β ΔT L / 8` at every point.
+#[test]
+fn rod_twin_follows_b_eqs_55_to_57() {
+    use thm_coupling::multiscale::RodTwin;
+    use thm_coupling::multiscale::rod::{
+        TWIN_YOUNGS_MODULUS, rod_displacement, rod_displacements, rod_stress, rod_temperature,
+    };
+    let rod = GranularRod::paper();
+    let mut twin = RodTwin::new(&rod).unwrap();
+    let steps = (0.4 / rod.time_step).round() as u64;
+    for _ in 0..steps {
+        twin.step().unwrap();
+    }
+    let t = steps as f64 * rod.time_step;
+    let (l, t0, t1, kappa) = (
+        rod.length,
+        rod.cold_temperature,
+        rod.hot_temperature,
+        rod.diffusivity(),
+    );
+    let beta = rod.rve.thermal_expansion_coefficient;
+    let e = TWIN_YOUNGS_MODULUS;
+    let sigma = rod_stress(t, l, t0, t1, kappa, e, beta);
+    let u = rod_displacements(&rod, &twin.state.points);
+    let h = rod.cell_size();
+    for (p, ((temp, s), u)) in twin
+        .state
+        .points
+        .remapped_temperature
+        .iter()
+        .zip(&twin.state.points.stress)
+        .zip(&u)
+        .enumerate()
+    {
+        let x = (p as f64 + 0.5) * h;
+        let want_t = rod_temperature(x, t, l, t0, t1, kappa);
+        assert!(
+            (temp - want_t).abs() <= 0.5,
+            "point {p}: T {temp} vs {want_t}"
+        );
+        assert!(
+            (s[0] - sigma).abs() <= 0.03 * e * beta * (t1 - t0),
+            "point {p}: sigma_x {} vs {sigma}",
+            s[0]
+        );
+        let want_u = rod_displacement(x, t, l, t0, t1, kappa, beta);
+        assert!(
+            (u - want_u).abs() <= 0.03 * beta * (t1 - t0) * l / 8.0,
+            "point {p}: u {u} vs {want_u}"
+        );
+    }
+}

@@ -176,5 +176,5 @@ pub use material::RveMaterial;
 pub use model::{LoadingPhase, MultiscaleModel, PackingReport, Protocol};
 pub use params::{DemTimeRule, MultiscaleConfig, MultiscaleParams, QuasiStaticLimits};
 pub use point::{PointOutcome, RvePoint, partition, rve_cost};
-pub use rod::{GranularRod, RodModel};
+pub use rod::{GranularRod, RodModel, RodTwin};
 pub use silo::{SiloModel, SiloTest};

@@ -6,8 +6,8 @@
 use serde::{Deserialize, Serialize};
 use thm_dem::Vec3;
 use thm_mpm::{
-    GridParameters, MaterialPoints, Mpm, MpmConfig, MpmParameters, MpmState, NodeSet,
-    PointProperties, TemperatureCondition, VelocityCondition,
+    GridParameters, LinearThermoElastic, MaterialPoints, Mpm, MpmConfig, MpmParameters, MpmState,
+    NodeSet, PointProperties, TemperatureCondition, ThermoElasticParameters, VelocityCondition,
 };
 use thm_rve::{Mat2, PeriodicCell, RveParams, RveState, RveStepper, measure};
 
@@ -195,60 +195,8 @@ impl RodModel {
     /// temperatures on the nodes at and beyond each end; `v_y = 0` everywhere (see the module
     /// docs: with ν = 0 of the square packing, σ_x does not depend on the lateral condition).
     pub fn new(rod: &GranularRod) -> Result<Self, MultiscaleError> {
-        if rod.cells < 2 {
-            return Err(MultiscaleError::InvalidParameter {
-                field: "cells",
-                value: rod.cells as f64,
-                allowed: "[2, inf)",
-            });
-        }
+        let config = rod_grid(rod)?;
         let (rve, lattice) = rod_rve_params(rod)?;
-        let h = rod.cell_size();
-        let l = rod.length;
-        let mut params = MpmParameters::on_grid(GridParameters {
-            origin: [-h, 0.0],
-            cell_size: h,
-            cells: [rod.cells + 2, 2],
-        });
-        params.pic_fraction = rod.pic_fraction;
-        params.grid_damping = rod.grid_damping;
-        let eps = 1e-9 * h;
-        let cold = NodeSet::Region {
-            lower: [-2.0 * h, -1.0],
-            upper: [eps, 1.0],
-        };
-        let hot = NodeSet::Region {
-            lower: [l - eps, -1.0],
-            upper: [l + 2.0 * h, 1.0],
-        };
-        params.velocity_conditions = vec![
-            VelocityCondition {
-                nodes: NodeSet::All,
-                fix_x: false,
-                fix_y: true,
-            },
-            VelocityCondition {
-                nodes: cold,
-                fix_x: true,
-                fix_y: true,
-            },
-            VelocityCondition {
-                nodes: hot,
-                fix_x: true,
-                fix_y: true,
-            },
-        ];
-        params.temperature_conditions = vec![
-            TemperatureCondition {
-                nodes: cold,
-                temperature: rod.cold_temperature,
-            },
-            TemperatureCondition {
-                nodes: hot,
-                temperature: rod.hot_temperature,
-            },
-        ];
-        let config = MpmConfig::new(params)?;
         let material = RveMaterial::new(
             &MultiscaleParams {
                 rve,
@@ -258,21 +206,7 @@ impl RodModel {
             },
             lattice,
         )?;
-        let mut points = MaterialPoints::new();
-        points.fill_rectangle(
-            config.grid(),
-            [0.0, 0.0],
-            [l, h],
-            1,
-            &PointProperties {
-                density: rod.density,
-                specific_heat: rod.specific_heat,
-                conductivity: [rod.conductivity, rod.conductivity, 0.0],
-                temperature: rod.cold_temperature,
-                velocity: [0.0; 2],
-            },
-        )?;
-        let state = material.state(points);
+        let state = material.state(rod_points(rod, &config)?);
         Ok(Self {
             mpm: Mpm::new(config),
             state,
@@ -295,15 +229,154 @@ impl RodModel {
 
     /// Displacement `u_x = x_p − X_p` of every point (m), with `X_p` its initial position.
     pub fn displacements(&self) -> Vec<f64> {
-        let h = self.rod.cell_size();
-        self.state
-            .points
-            .position
-            .iter()
-            .enumerate()
-            .map(|(i, x)| x[0] - (i as f64 + 0.5) * h)
-            .collect()
+        rod_displacements(&self.rod, &self.state.points)
     }
+}
+
+/// Young's modulus of the TM-MPM column of B-Table 1 (Pa).
+pub const TWIN_YOUNGS_MODULUS: f64 = 1.33e7;
+
+/// The TM-MPM rod of B-Fig. 9(a–c): the grid, boundary conditions, damping, time step and
+/// points of [`RodModel`], every point linear thermo-elastic with B-Table 1's TM-MPM column
+/// (E = 13.3 MPa, ν = 0, β = the RVE's expansion coefficient, k and ρ c as the rod), starting
+/// stress-free (with ν = 0 the 100 kPa confinement does not change σ_x or u_x).
+#[derive(Debug, Clone)]
+pub struct RodTwin {
+    /// The MPM stepper.
+    pub mpm: Mpm,
+    /// The state: material points, no history.
+    pub state: MpmState<()>,
+    /// The thermo-elastic material.
+    pub material: LinearThermoElastic,
+    /// The parameters.
+    pub rod: GranularRod,
+}
+
+impl RodTwin {
+    /// The twin of [`RodModel::new`]`(rod)`.
+    pub fn new(rod: &GranularRod) -> Result<Self, MultiscaleError> {
+        let config = rod_grid(rod)?;
+        let material = LinearThermoElastic::new(&ThermoElasticParameters {
+            youngs_modulus: TWIN_YOUNGS_MODULUS,
+            poisson_ratio: 0.0,
+            thermal_expansion: rod.rve.thermal_expansion_coefficient,
+            conductivity: [rod.conductivity, rod.conductivity, 0.0],
+        })?;
+        let points = rod_points(rod, &config)?;
+        let n = points.len();
+        Ok(Self {
+            mpm: Mpm::new(config),
+            state: MpmState {
+                points,
+                material: vec![(); n],
+                time: 0.0,
+                step: 0,
+            },
+            material,
+            rod: *rod,
+        })
+    }
+
+    /// One step of the rod's time step.
+    pub fn step(&mut self) -> Result<(), MultiscaleError> {
+        self.mpm
+            .step(&mut self.state, &self.material, self.rod.time_step)?;
+        Ok(())
+    }
+
+    /// Displacement `u_x = x_p − X_p` of every point (m).
+    pub fn displacements(&self) -> Vec<f64> {
+        rod_displacements(&self.rod, &self.state.points)
+    }
+}
+
+/// The rod's grid of B-Fig. 8(b): `cells + 2` × 2 cells of `h = L/cells` with one padding cell
+/// beyond each end; `v_x = 0` and the end temperatures on the nodes at and beyond each end;
+/// `v_y = 0` everywhere (with ν = 0, σ_x does not depend on the lateral condition).
+fn rod_grid(rod: &GranularRod) -> Result<MpmConfig, MultiscaleError> {
+    if rod.cells < 2 {
+        return Err(MultiscaleError::InvalidParameter {
+            field: "cells",
+            value: rod.cells as f64,
+            allowed: "[2, inf)",
+        });
+    }
+    let h = rod.cell_size();
+    let l = rod.length;
+    let mut params = MpmParameters::on_grid(GridParameters {
+        origin: [-h, 0.0],
+        cell_size: h,
+        cells: [rod.cells + 2, 2],
+    });
+    params.pic_fraction = rod.pic_fraction;
+    params.grid_damping = rod.grid_damping;
+    let eps = 1e-9 * h;
+    let cold = NodeSet::Region {
+        lower: [-2.0 * h, -1.0],
+        upper: [eps, 1.0],
+    };
+    let hot = NodeSet::Region {
+        lower: [l - eps, -1.0],
+        upper: [l + 2.0 * h, 1.0],
+    };
+    params.velocity_conditions = vec![
+        VelocityCondition {
+            nodes: NodeSet::All,
+            fix_x: false,
+            fix_y: true,
+        },
+        VelocityCondition {
+            nodes: cold,
+            fix_x: true,
+            fix_y: true,
+        },
+        VelocityCondition {
+            nodes: hot,
+            fix_x: true,
+            fix_y: true,
+        },
+    ];
+    params.temperature_conditions = vec![
+        TemperatureCondition {
+            nodes: cold,
+            temperature: rod.cold_temperature,
+        },
+        TemperatureCondition {
+            nodes: hot,
+            temperature: rod.hot_temperature,
+        },
+    ];
+    Ok(MpmConfig::new(params)?)
+}
+
+/// One row of points (one per cell) filling `[0, L] × [0, h]` at the cold temperature.
+fn rod_points(rod: &GranularRod, config: &MpmConfig) -> Result<MaterialPoints, MultiscaleError> {
+    let mut points = MaterialPoints::new();
+    points.fill_rectangle(
+        config.grid(),
+        [0.0, 0.0],
+        [rod.length, rod.cell_size()],
+        1,
+        &PointProperties {
+            density: rod.density,
+            specific_heat: rod.specific_heat,
+            conductivity: [rod.conductivity, rod.conductivity, 0.0],
+            temperature: rod.cold_temperature,
+            velocity: [0.0; 2],
+        },
+    )?;
+    Ok(points)
+}
+
+/// `u_x = x_p − X_p` of the rod's points, `X_p = (p + ½) h`.
+pub fn rod_displacements(rod: &GranularRod, points: &MaterialPoints) -> Vec<f64> {
+    let h = rod.cell_size();
+    points
+        .position
+        .iter()
+        .enumerate()
+        .map(|(i, x)| x[0] - (i as f64 + 0.5) * h)
+        .collect()
 }
 
 /// Terms of the series of B-Eqs. 55–57 (the slowest, `n = 1`, decays as `e^{−π² κ t/L²}`;

@@ -55,10 +55,12 @@
 //! stays within 0.45 kPa); displacement 3 % of `β ΔT L / 8` (the largest quasi-static
 //! displacement at steady state).
 
+use thm_mpm::MaterialPoints;
 use thm_verify::{Case, CaseError, CaseOutput, Plot, Row, Series, SeriesRole};
 
 use crate::multiscale::rod::{
-    GranularRod, RodModel, rod_displacement, rod_stress, rod_temperature,
+    GranularRod, RodModel, RodTwin, TWIN_YOUNGS_MODULUS, rod_displacement, rod_displacements,
+    rod_stress, rod_temperature,
 };
 use crate::multiscale::square::{GranularSquare, SquareModel, slab_factor};
 
@@ -76,6 +78,12 @@ pub fn cases() -> Vec<Case> {
             description: "B-Sect. 5.2.1 rod for 0.5 s, 10 x 10-disk lattice RVEs density-scaled by 20 (one DEM step per MPM step): B-Eqs. 55-57",
             quick: true,
             run: rod_case_quick,
+        },
+        Case {
+            name: "coupling/mpm_rod_twin",
+            description: "B-Sect. 5.2.1, B-Fig. 9(a-c): the TM-MPM rod (B-Table 1: E = 13.3 MPa, nu = 0) on the granular rod's grid, boundary conditions, damping and time step, 1 s: temperature (B-Eq. 55), stress after 0.4 s (B-Eq. 56 with K = E), displacement (B-Eq. 57)",
+            quick: true,
+            run: rod_twin_case,
         },
         Case {
             name: "coupling/mpm_dem_square",
@@ -96,6 +104,18 @@ fn rod_case_full() -> Result<CaseOutput, CaseError> {
     rod_case(&GranularRod::paper(), 1.0)
 }
 
+/// The TM-MPM rod of B-Fig. 9(a–c) against B-Eqs. 55–57 with `K = E` (ν = 0), with the
+/// tolerances of the granular rod.
+fn rod_twin_case() -> Result<CaseOutput, CaseError> {
+    let rod = GranularRod::paper();
+    let mut m = RodTwin::new(&rod).map_err(CaseError::from_display)?;
+    let mut out = compare_rod(&mut m, &rod, TWIN_YOUNGS_MODULUS, 1.0, "TM-MPM")?;
+    out.notes.push(
+        "The granular rod's grid (50 cells, one point each), end conditions, alpha_g = 0.01, alpha_PIC = 0 and dt = 1e-4 s; linear thermo-elastic points (thm_mpm::LinearThermoElastic) with E = 13.3 MPa, nu = 0, beta = 1e-4 /K, k = 0.1 W/(m K), rho c = 1 J/(m^3 K), stress-free at the start. B-Eq. 56's K is E (uniaxial strain with nu = 0). Tolerances as coupling/mpm_dem_rod: 0.5 °C, 3 % of K beta dT, 3 % of beta dT L / 8.".into(),
+    );
+    Ok(out)
+}
+
 fn rod_case_quick() -> Result<CaseOutput, CaseError> {
     let mut rod = GranularRod::paper();
     rod.dem_time.density_scaling = 20.0;
@@ -114,16 +134,71 @@ fn max_diff(a: &[f64], b: &[f64]) -> f64 {
         .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()))
 }
 
-/// Runs the rod for `duration` and compares it with B-Eqs. 55–57.
-pub fn rod_case(rod: &GranularRod, duration: f64) -> Result<CaseOutput, CaseError> {
-    let mut m = RodModel::new(rod).map_err(CaseError::from_display)?;
+/// A rod model stepped by the comparison with B-Eqs. 55–57: the DEM-backed rod or its
+/// TM-MPM twin.
+trait RodRun {
+    /// One step.
+    fn advance(&mut self) -> Result<(), CaseError>;
+    /// The points after the last step.
+    fn points(&self) -> &MaterialPoints;
+    /// After every step (`t` its end): the model's own measures.
+    fn after_step(&mut self, _t: f64) {}
+}
+
+/// The DEM-backed rod with the largest quasi-static measures seen.
+struct DemRod {
+    model: RodModel,
+    inertial: f64,
+    shock_inertial: f64,
+    kinetic: f64,
+    substeps: u32,
+}
+
+impl RodRun for DemRod {
+    fn advance(&mut self) -> Result<(), CaseError> {
+        self.model.step().map_err(CaseError::from_display)
+    }
+    fn points(&self) -> &MaterialPoints {
+        &self.model.state.points
+    }
+    fn after_step(&mut self, t: f64) {
+        for p in &self.model.state.material {
+            if t > SHOCK {
+                self.inertial = self.inertial.max(p.inertial_number);
+            } else {
+                self.shock_inertial = self.shock_inertial.max(p.inertial_number);
+            }
+            self.kinetic = self.kinetic.max(p.kinetic_ratio);
+            self.substeps = self.substeps.max(p.substeps);
+        }
+    }
+}
+
+impl RodRun for RodTwin {
+    fn advance(&mut self) -> Result<(), CaseError> {
+        self.step().map_err(CaseError::from_display)
+    }
+    fn points(&self) -> &MaterialPoints {
+        &self.state.points
+    }
+}
+
+/// Steps `m` for `duration` and compares it with B-Eqs. 55–57 (axial stiffness `k`): the
+/// temperature at 0.1, 0.4 and 1 s, the stress change every 10 ms from 0.4 s, the
+/// displacement at 0.4 and 1 s, as pass/fail rows; the plots labelled `label`.
+fn compare_rod(
+    m: &mut impl RodRun,
+    rod: &GranularRod,
+    k: f64,
+    duration: f64,
+    label: &str,
+) -> Result<CaseOutput, CaseError> {
     let kappa = rod.diffusivity();
     let (l, t0, t1) = (rod.length, rod.cold_temperature, rod.hot_temperature);
     let beta = rod.rve.thermal_expansion_coefficient;
-    let k = m.axial_stiffness();
     let h = rod.cell_size();
     let x: Vec<f64> = (0..rod.cells).map(|i| (i as f64 + 0.5) * h).collect();
-    let sigma0 = m.state.points.stress[0][0];
+    let sigma0 = m.points().stress[0][0];
     let steps = (duration / rod.time_step).round() as u64;
     let per_10ms = ((0.01 / rod.time_step).round() as u64).max(1);
     let profile_steps: Vec<u64> = [0.1, 0.4, 1.0]
@@ -133,32 +208,16 @@ pub fn rod_case(rod: &GranularRod, duration: f64) -> Result<CaseOutput, CaseErro
         .collect();
     let mid = rod.cells / 2;
     let (mut t_err, mut s_err, mut u_err) = (Vec::new(), 0.0_f64, Vec::new());
-    let (mut inertial, mut kinetic, mut substeps) = (0.0_f64, 0.0_f64, 0u32);
-    let mut shock_inertial = 0.0_f64;
     let mut stress_series = (Vec::new(), Vec::new(), Vec::new());
     let mut plots = Vec::new();
-    let start = std::time::Instant::now();
     for n in 1..=steps {
-        m.step().map_err(CaseError::from_display)?;
+        m.advance()?;
         let t = n as f64 * rod.time_step;
-        for p in &m.state.material {
-            if t > SHOCK {
-                inertial = inertial.max(p.inertial_number);
-            } else {
-                shock_inertial = shock_inertial.max(p.inertial_number);
-            }
-            kinetic = kinetic.max(p.kinetic_ratio);
-            substeps = substeps.max(p.substeps);
-        }
+        m.after_step(t);
+        let pts = m.points();
         if n % per_10ms == 0 {
             let reference = rod_stress(t, l, t0, t1, kappa, k, beta);
-            let sx: Vec<f64> = m
-                .state
-                .points
-                .stress
-                .iter()
-                .map(|s| s[0] - sigma0)
-                .collect();
+            let sx: Vec<f64> = pts.stress.iter().map(|s| s[0] - sigma0).collect();
             stress_series.0.push(t);
             stress_series.1.push(sx[mid]);
             stress_series.2.push(reference);
@@ -167,13 +226,13 @@ pub fn rod_case(rod: &GranularRod, duration: f64) -> Result<CaseOutput, CaseErro
             }
         }
         if profile_steps.contains(&n) {
-            let tp = &m.state.points.remapped_temperature;
+            let tp = &pts.remapped_temperature;
             let reference: Vec<f64> = x
                 .iter()
                 .map(|x| rod_temperature(*x, t, l, t0, t1, kappa))
                 .collect();
             t_err.push((t, max_diff(tp, &reference)));
-            let u = m.displacements();
+            let u = rod_displacements(rod, pts);
             let u_ref: Vec<f64> = x
                 .iter()
                 .map(|x| rod_displacement(*x, t, l, t0, t1, kappa, beta))
@@ -185,6 +244,7 @@ pub fn rod_case(rod: &GranularRod, duration: f64) -> Result<CaseOutput, CaseErro
                 &format!("rod_temperature_{:.0}ms", 1e3 * t),
                 &format!("B-Eq. 55: rod temperature at t = {t:.1} s"),
                 "temperature (°C)",
+                label,
                 &x,
                 tp,
                 &reference,
@@ -193,15 +253,13 @@ pub fn rod_case(rod: &GranularRod, duration: f64) -> Result<CaseOutput, CaseErro
                 &format!("rod_displacement_{:.0}ms", 1e3 * t),
                 &format!("B-Eq. 57: rod displacement at t = {t:.1} s"),
                 "u_x (m)",
+                label,
                 &x,
                 &u,
                 &u_ref,
             ));
         }
     }
-    let wall = start.elapsed().as_secs_f64();
-    let disk_steps =
-        steps as f64 * rod.cells as f64 * (rod.disks_per_side.pow(2)) as f64 * f64::from(substeps);
     let mut out = CaseOutput::default();
     for (t, e) in &t_err {
         out.rows.push(Row::at_most(
@@ -227,6 +285,49 @@ pub fn rod_case(rod: &GranularRod, duration: f64) -> Result<CaseOutput, CaseErro
             0.03 * u_scale,
         ));
     }
+    plots.push(Plot {
+        name: "rod_stress_midpoint".into(),
+        title: "B-Eq. 56: axial stress change at the rod's middle point".into(),
+        x_label: "t (s)".into(),
+        y_label: "Δσ_x (Pa)".into(),
+        series: vec![
+            Series {
+                label: label.into(),
+                role: SeriesRole::Measured,
+                x: stress_series.0.clone(),
+                y: stress_series.1,
+            },
+            Series {
+                label: "B-Eq. 56".into(),
+                role: SeriesRole::Reference,
+                x: stress_series.0,
+                y: stress_series.2,
+            },
+        ],
+    });
+    out.plots = plots;
+    Ok(out)
+}
+
+/// Runs the rod for `duration` and compares it with B-Eqs. 55–57.
+pub fn rod_case(rod: &GranularRod, duration: f64) -> Result<CaseOutput, CaseError> {
+    let model = RodModel::new(rod).map_err(CaseError::from_display)?;
+    let k = model.axial_stiffness();
+    let mut m = DemRod {
+        model,
+        inertial: 0.0,
+        shock_inertial: 0.0,
+        kinetic: 0.0,
+        substeps: 0,
+    };
+    let start = std::time::Instant::now();
+    let mut out = compare_rod(&mut m, rod, k, duration, "TM-DEMPM")?;
+    let wall = start.elapsed().as_secs_f64();
+    let steps = (duration / rod.time_step).round() as u64;
+    let (inertial, shock_inertial, kinetic, substeps) =
+        (m.inertial, m.shock_inertial, m.kinetic, m.substeps);
+    let disk_steps =
+        steps as f64 * rod.cells as f64 * (rod.disks_per_side.pow(2)) as f64 * f64::from(substeps);
     out.rows.push(Row::at_most(
         "largest RVE kinetic/elastic energy ratio (DEM time rule)",
         "-",
@@ -249,7 +350,7 @@ pub fn rod_case(rod: &GranularRod, duration: f64) -> Result<CaseOutput, CaseErro
         "K = D_xxxx of the RVE (B-Eq. 58) vs B-Table 1's E",
         "Pa",
         k,
-        1.33e7,
+        TWIN_YOUNGS_MODULUS,
     ));
     out.rows.push(Row::reported(
         "DEM steps per MPM step (N)",
@@ -263,27 +364,6 @@ pub fn rod_case(rod: &GranularRod, duration: f64) -> Result<CaseOutput, CaseErro
         disk_steps / wall,
         f64::NAN,
     ));
-    plots.push(Plot {
-        name: "rod_stress_midpoint".into(),
-        title: "B-Eq. 56: axial stress change at the rod's middle point".into(),
-        x_label: "t (s)".into(),
-        y_label: "Δσ_x (Pa)".into(),
-        series: vec![
-            Series {
-                label: "TM-DEMPM".into(),
-                role: SeriesRole::Measured,
-                x: stress_series.0.clone(),
-                y: stress_series.1,
-            },
-            Series {
-                label: "B-Eq. 56".into(),
-                role: SeriesRole::Reference,
-                x: stress_series.0,
-                y: stress_series.2,
-            },
-        ],
-    });
-    out.plots = plots;
     out.notes.push(format!(
         "{} material points x {} disks, {} MPM steps of {} s, N = {} DEM steps each, density scaling {}, {:.1} s wall.",
         rod.cells,
@@ -305,7 +385,15 @@ pub fn rod_case(rod: &GranularRod, duration: f64) -> Result<CaseOutput, CaseErro
     Ok(out)
 }
 
-fn profile_plot(name: &str, title: &str, y_label: &str, x: &[f64], y: &[f64], r: &[f64]) -> Plot {
+fn profile_plot(
+    name: &str,
+    title: &str,
+    y_label: &str,
+    label: &str,
+    x: &[f64],
+    y: &[f64],
+    r: &[f64],
+) -> Plot {
     Plot {
         name: name.into(),
         title: title.into(),
@@ -313,7 +401,7 @@ fn profile_plot(name: &str, title: &str, y_label: &str, x: &[f64], y: &[f64], r:
         y_label: y_label.into(),
         series: vec![
             Series {
-                label: "TM-DEMPM".into(),
+                label: label.into(),
                 role: SeriesRole::Measured,
                 x: x.to_vec(),
                 y: y.to_vec(),
