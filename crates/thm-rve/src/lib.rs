@@ -123,6 +123,7 @@
 pub mod batch;
 pub mod cell;
 pub mod error;
+mod kernel;
 pub mod mat2;
 pub mod measure;
 pub mod neighbour;

@@ -26,13 +26,14 @@
 //! returns stress, heat source and conductivity (B-Eqs. 33, 34, 49).
 
 use crate::error::{RveError, check_positive};
+use crate::kernel::{self, DiskLoad, DiskRecord};
 use crate::mat2::Mat2;
 use crate::measure;
 use crate::neighbour::{Candidate, PeriodicGrid};
 use crate::params::RveConfig;
 use crate::state::{PeriodicContacts, RveState};
 use serde::{Deserialize, Serialize};
-use thm_dem::{ContactHistory, ContactKinematics, ContactLaw, PairInput, Vec2, Vec3};
+use thm_dem::{ContactHistory, Vec2, Vec3};
 
 /// What the material point imposes on its RVE for one macroscopic step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -70,6 +71,7 @@ pub struct RveStepper {
     temperature: Vec<f64>,
     disk: Vec<DiskRecord>,
     load: Vec<DiskLoad>,
+    active: Vec<u32>,
 }
 
 impl RveStepper {
@@ -83,6 +85,7 @@ impl RveStepper {
             temperature: Vec::new(),
             disk: Vec::new(),
             load: Vec::new(),
+            active: Vec::new(),
         }
     }
 
@@ -97,6 +100,7 @@ impl RveStepper {
             + cap(&self.temperature)
             + cap(&self.disk)
             + cap(&self.load)
+            + cap(&self.active)
     }
 
     /// The configuration.
@@ -251,60 +255,18 @@ impl RveStepper {
         );
         self.load.clear();
         self.load.resize(disks.len(), DiskLoad::default());
-        let (disk, load) = (&self.disk, &mut self.load);
-        let contacts = &mut state.contacts;
         let h = *state.cell.matrix();
-        let mut moment = Mat2::ZERO;
-        let mut heat = 0.0;
-        for ((((pair, shift), history), force_on_b), branch_out) in contacts
-            .pair
-            .iter()
-            .zip(&contacts.shift)
-            .zip(contacts.history.iter_mut())
-            .zip(contacts.force_on_b.iter_mut())
-            .zip(contacts.branch.iter_mut())
-        {
-            let (a, b) = (pair[0] as usize, pair[1] as usize);
-            let (da, db) = (&disk[a], &disk[b]);
-            let lattice = h.apply_vec2(Vec2::new(f64::from(shift[0]), f64::from(shift[1])));
-            let branch = db.position + lattice - da.position;
-            *branch_out = branch;
-            let reach = da.radius + db.radius;
-            if history.bond != thm_dem::BondState::Intact && branch.norm_squared() >= reach * reach
-            {
-                // Apart and unbonded: the law would return zero and clear the shear force.
-                history.shear_force = Vec2::ZERO;
-                history.normal = Vec2::ZERO;
-                *force_on_b = Vec2::ZERO;
-                continue;
-            }
-            let relative_velocity = db.velocity - da.velocity + l.apply_vec2(branch);
-            let kinematics = ContactKinematics::<Vec2>::from_pair(
-                branch,
-                relative_velocity,
-                da.spin,
-                db.spin,
-                da.radius,
-                db.radius,
-                dt,
-            );
-            let pair = PairInput {
-                radius_a: da.radius,
-                radius_b: db.radius,
-                temperature: 0.5 * (da.temperature + db.temperature),
-            };
-            let r = law.respond(&pair, &kinematics, history);
-            let f = r.force_on_b;
-            *force_on_b = f;
-            let la = &mut load[a];
-            la.force -= f;
-            la.torque += r.torque_on_a;
-            let lb = &mut load[b];
-            lb.force += f;
-            lb.torque += r.torque_on_b;
-            moment = moment.add_scaled(&Mat2::outer_vec2(f, branch), 1.0);
-            heat += r.friction_work;
-        }
+        kernel::classify(&mut state.contacts, &self.disk, &h, &mut self.active);
+        let (moment, heat) = kernel::evaluate(
+            law,
+            &mut state.contacts,
+            &self.disk,
+            &mut self.load,
+            &self.active,
+            l,
+            dt,
+        );
+        let load = &self.load;
         for ((f, t), ld) in disks
             .force
             .iter_mut()
@@ -453,21 +415,4 @@ fn first_non_finite(state: &RveState) -> RveError {
         index: 0,
         step: state.step,
     }
-}
-
-/// What a contact needs of a disk, in one record.
-#[derive(Debug, Clone, Copy, Default)]
-struct DiskRecord {
-    position: Vec2,
-    velocity: Vec2,
-    spin: f64,
-    radius: f64,
-    temperature: f64,
-}
-
-/// Force and torque summed over a disk's contacts.
-#[derive(Debug, Clone, Copy, Default)]
-struct DiskLoad {
-    force: Vec2,
-    torque: f64,
 }
