@@ -117,9 +117,15 @@ impl RveStepper {
     /// One DEM step of `dt` under the velocity gradient `l`. Returns the friction heat of the
     /// step, `E_f` of B-Eq. 32 \[J\].
     pub fn step(&mut self, state: &mut RveState, l: &Mat2, dt: f64) -> Result<f64, RveError> {
-        self.integrate(state, l, dt)?;
-        self.update_neighbours(state)?;
-        let heat = self.compute_contact_forces(state, l, dt);
+        // The integration leaves the disk records the contact loop reads; a rebuild of the
+        // pair list may wrap centres into the cell, so the records' centres follow it.
+        self.integrate_into_records(state, l, dt)?;
+        if self.update_neighbours(state)? {
+            for (record, x) in self.disk.iter_mut().zip(&state.disks.position) {
+                record.position = Vec2::from_xy(*x);
+            }
+        }
+        let heat = self.forces_from_records(state, l, dt);
         state.step += 1;
         state.time += dt;
         state.friction_heat_total += heat;
@@ -234,8 +240,7 @@ impl RveStepper {
     /// radius, temperature), so a contact reads two records instead of ten arrays, and the
     /// forces are summed in list order into compact accumulators.
     pub fn compute_contact_forces(&mut self, state: &mut RveState, l: &Mat2, dt: f64) -> f64 {
-        let law = self.config.law();
-        let disks = &mut state.disks;
+        let disks = &state.disks;
         self.disk.clear();
         self.disk.extend(
             disks
@@ -253,6 +258,14 @@ impl RveStepper {
                     temperature,
                 }),
         );
+        self.forces_from_records(state, l, dt)
+    }
+
+    /// [`RveStepper::compute_contact_forces`] with the disk records already filled from the
+    /// state.
+    fn forces_from_records(&mut self, state: &mut RveState, l: &Mat2, dt: f64) -> f64 {
+        let law = self.config.law();
+        let disks = &mut state.disks;
         self.load.clear();
         self.load.resize(disks.len(), DiskLoad::default());
         let h = *state.cell.matrix();
@@ -297,21 +310,54 @@ impl RveStepper {
             .zip(&disks.force)
             .zip(&disks.torque)
         {
-            let (dt_m, dt_i) = (dt / m, dt / inertia);
-            let (fx, fy, tz) = (
-                local_damping(f.x, v.x, dt_m, alpha),
-                local_damping(f.y, v.y, dt_m, alpha),
-                local_damping(t.z, w.z, dt_i, alpha),
-            );
-            let v_new = Vec2::new(v.x + fx * dt_m, v.y + fy * dt_m);
-            let w_new = w.z + tz * dt_i;
-            let x_old = Vec2::from_xy(*x);
-            let x_new = x_old + (v_new + l.apply_vec2(x_old)) * dt;
+            let (x_new, v_new, w_new) = advance(x, v, w, m, inertia, f, t, l, dt, alpha);
             finite &= v_new.is_finite() && w_new.is_finite() && x_new.is_finite();
-            *v = v_new.to_vec3();
-            *w = Vec3::new(0.0, 0.0, w_new);
-            *x = x_new.to_vec3();
         }
+        if !finite {
+            return Err(first_non_finite(state));
+        }
+        state.cell.deform(l, dt)
+    }
+
+    /// [`RveStepper::integrate`] that also fills the disk records of the contact loop with
+    /// the new motion (one pass over the disks instead of two).
+    fn integrate_into_records(
+        &mut self,
+        state: &mut RveState,
+        l: &Mat2,
+        dt: f64,
+    ) -> Result<(), RveError> {
+        let alpha = self.config.params().local_damping;
+        let disks = &mut state.disks;
+        let mut finite = true;
+        self.disk.clear();
+        self.disk.extend(
+            disks
+                .position
+                .iter_mut()
+                .zip(disks.velocity.iter_mut())
+                .zip(disks.angular_velocity.iter_mut())
+                .zip(&disks.mass)
+                .zip(&disks.inertia)
+                .zip(&disks.force)
+                .zip(&disks.torque)
+                .zip(&disks.radius)
+                .zip(&disks.temperature)
+                .map(
+                    |((((((((x, v), w), &m), &inertia), f), t), &radius), &temperature)| {
+                        let (x_new, v_new, w_new) =
+                            advance(x, v, w, m, inertia, f, t, l, dt, alpha);
+                        finite &= v_new.is_finite() && w_new.is_finite() && x_new.is_finite();
+                        DiskRecord {
+                            position: x_new,
+                            velocity: v_new,
+                            spin: w_new,
+                            radius,
+                            temperature,
+                        }
+                    },
+                ),
+        );
         if !finite {
             return Err(first_non_finite(state));
         }
@@ -377,6 +423,38 @@ impl RveStepper {
             conductivity: measure::conductivity(state, self.config.params()),
         })
     }
+}
+
+/// One disk's leapfrog step (see [`RveStepper::integrate`]): writes the new centre, velocity
+/// and spin and returns them.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn advance(
+    x: &mut Vec3,
+    v: &mut Vec3,
+    w: &mut Vec3,
+    m: f64,
+    inertia: f64,
+    f: &Vec3,
+    t: &Vec3,
+    l: &Mat2,
+    dt: f64,
+    alpha: f64,
+) -> (Vec2, Vec2, f64) {
+    let (dt_m, dt_i) = (dt / m, dt / inertia);
+    let (fx, fy, tz) = (
+        local_damping(f.x, v.x, dt_m, alpha),
+        local_damping(f.y, v.y, dt_m, alpha),
+        local_damping(t.z, w.z, dt_i, alpha),
+    );
+    let v_new = Vec2::new(v.x + fx * dt_m, v.y + fy * dt_m);
+    let w_new = w.z + tz * dt_i;
+    let x_old = Vec2::from_xy(*x);
+    let x_new = x_old + (v_new + l.apply_vec2(x_old)) * dt;
+    *v = v_new.to_vec3();
+    *w = Vec3::new(0.0, 0.0, w_new);
+    *x = x_new.to_vec3();
+    (x_new, v_new, w_new)
 }
 
 /// Cundall's local non-viscous damping of one component: `F − α |F| sgn(v)` with the mid-step
