@@ -3,32 +3,27 @@
 //!
 //! `thm_dem`'s law ([`thm_dem::ContactKinematics::from_pair`], [`thm_dem::update_contact`]
 //! with [`thm_dem::LinearSpring`]'s properties) is one long chain of dependent operations per
-//! contact (a root, a quotient, the frame rotation, the Coulomb limit, possibly a second root
-//! and quotient) with branches on the contact state. Here the same operations run on
-//! [`LANES`] contacts at once, each quantity an array with one contact per lane: the lanes
-//! are independent, so the compiler packs them into vector instructions and the chains of
-//! several contacts overlap; the branches of the contact-state machine become per-lane
-//! selects between results computed for every lane. Every lane computes exactly the
-//! operations the scalar law computes for its contact, in the same order, and a select only
-//! picks among them, so each contact's result has the law's bits.
+//! contact (a root, a quotient, the frame rotation, the Coulomb limit, a second root and
+//! quotient) with branches on the contact state. Evaluated contact after contact, the chain
+//! of one contact is longer than what the processor can look ahead, so it mostly waits.
+//! Here the law is cut into stages, each a plain loop over a block of [`BLOCK`] contacts held
+//! as one array per quantity: within a stage the contacts are independent, so the compiler
+//! packs them into vector instructions and the processor overlaps the short chains of many
+//! contacts. The branches of the contact-state machine become per-contact selects between
+//! results computed for every contact. Each contact still gets exactly the operations the
+//! scalar law computes for it, in the same order, and a select only picks among them, so its
+//! result has the law's bits.
 //!
 //! Two passes: [`classify`] computes every pair's periodic branch vector, settles the pairs
 //! that are apart and unbonded (the law would return zero) and lists the others;
-//! [`evaluate`] runs the law on the listed ones, [`LANES`] at a time, and sums disk forces,
-//! torques, the contact moment and the friction work in list order (the order of the
-//! scalar loop, so the sums have its bits too).
+//! [`evaluate`] runs the law on the listed ones, block by block, and sums disk forces,
+//! torques, the contact moment and the friction work in list order (the order of the scalar
+//! loop, so the sums have its bits too). On x86-64 processors with AVX2 the same code runs
+//! compiled for AVX2 (four contacts per instruction instead of two).
 
 use crate::mat2::Mat2;
 use crate::state::PeriodicContacts;
-use thm_dem::{BondState, ContactHistory, LinearSpring, Vec2};
-
-/// Contacts evaluated together.
-pub(crate) const LANES: usize = 4;
-
-type Lane = [f64; LANES];
-/// Per-lane condition: all bits set where true (what a vector comparison yields, so that
-/// selects are bitwise and/or, not branches).
-type Mask = [u64; LANES];
+use thm_dem::{BondState, LinearSpring, Vec2};
 
 /// What a contact needs of a disk, in one record.
 #[derive(Debug, Clone, Copy, Default)]
@@ -76,37 +71,6 @@ impl Law {
     }
 }
 
-#[inline(always)]
-fn map<F: Fn(usize) -> f64>(f: F) -> Lane {
-    std::array::from_fn(f)
-}
-
-#[inline(always)]
-fn mask<F: Fn(usize) -> bool>(f: F) -> Mask {
-    std::array::from_fn(|j| if f(j) { u64::MAX } else { 0 })
-}
-
-#[inline(always)]
-fn and(a: &Mask, b: &Mask) -> Mask {
-    std::array::from_fn(|j| a[j] & b[j])
-}
-
-#[inline(always)]
-fn and_not(a: &Mask, b: &Mask) -> Mask {
-    std::array::from_fn(|j| a[j] & !b[j])
-}
-
-#[inline(always)]
-fn or(a: &Mask, b: &Mask) -> Mask {
-    std::array::from_fn(|j| a[j] | b[j])
-}
-
-/// `a` where `m`, else `b`, bit for bit.
-#[inline(always)]
-fn select(m: &Mask, a: &Lane, b: &Lane) -> Lane {
-    map(|j| f64::from_bits((a[j].to_bits() & m[j]) | (b[j].to_bits() & !m[j])))
-}
-
 /// `x.max(0.0)` as the law's `f64::max` compiles it on x86-64 (`maxsd x, 0`): `x` when
 /// `x > 0`, else `+0` (NaN and `−0` included), written as a select so that it packs.
 #[inline(always)]
@@ -151,220 +115,355 @@ pub(crate) fn classify(
     }
 }
 
-/// Pass 2: the law on the `active` contacts, [`LANES`] at a time; sums into `load` (which
+/// Contacts evaluated per block: the block's scratch (about 30 arrays) stays in L1.
+pub(crate) const BLOCK: usize = 64;
+
+/// Scratch of one block of contacts, one array per quantity (structure of arrays, so that
+/// each stage below is a plain loop the compiler vectorises).
+#[derive(Clone)]
+pub(crate) struct Block {
+    bx: [f64; BLOCK],
+    by: [f64; BLOCK],
+    ra: [f64; BLOCK],
+    rb: [f64; BLOCK],
+    wa: [f64; BLOCK],
+    wb: [f64; BLOCK],
+    rvx: [f64; BLOCK],
+    rvy: [f64; BLOCK],
+    temperature: [f64; BLOCK],
+    hnx: [f64; BLOCK],
+    hny: [f64; BLOCK],
+    hsx: [f64; BLOCK],
+    hsy: [f64; BLOCK],
+    ref_pen: [f64; BLOCK],
+    intact: [u64; BLOCK],
+    nx: [f64; BLOCK],
+    ny: [f64; BLOCK],
+    arm_a: [f64; BLOCK],
+    arm_b: [f64; BLOCK],
+    overlap: [f64; BLOCK],
+    sx: [f64; BLOCK],
+    sy: [f64; BLOCK],
+    s2: [f64; BLOCK],
+    limit: [f64; BLOCK],
+    normal_force: [f64; BLOCK],
+    sliding: [u64; BLOCK],
+    separated: [u64; BLOCK],
+    broke: [u64; BLOCK],
+    fx: [f64; BLOCK],
+    fy: [f64; BLOCK],
+    ta: [f64; BLOCK],
+    tb: [f64; BLOCK],
+    work: [f64; BLOCK],
+}
+
+impl Block {
+    pub(crate) fn new() -> Box<Self> {
+        let z = [0.0; BLOCK];
+        let u = [0; BLOCK];
+        Box::new(Self {
+            bx: z,
+            by: z,
+            ra: z,
+            rb: z,
+            wa: z,
+            wb: z,
+            rvx: z,
+            rvy: z,
+            temperature: z,
+            hnx: z,
+            hny: z,
+            hsx: z,
+            hsy: z,
+            ref_pen: z,
+            intact: u,
+            nx: z,
+            ny: z,
+            arm_a: z,
+            arm_b: z,
+            overlap: z,
+            sx: z,
+            sy: z,
+            s2: z,
+            limit: z,
+            normal_force: z,
+            sliding: u,
+            separated: u,
+            broke: u,
+            fx: z,
+            fy: z,
+            ta: z,
+            tb: z,
+            work: z,
+        })
+    }
+}
+
+impl std::fmt::Debug for Block {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Block")
+    }
+}
+
+/// A per-contact condition stored between stages: all bits set where true.
+#[inline(always)]
+fn flag(c: bool) -> u64 {
+    if c { u64::MAX } else { 0 }
+}
+
+/// Pass 2: the law on the `active` contacts, a [`BLOCK`] at a time; sums into `load` (which
 /// must be zero on entry), and returns the contact moment `Σ f ⊗ b` and the friction work.
+#[allow(clippy::too_many_arguments)]
+#[allow(unsafe_code)] // One call, proven below.
 pub(crate) fn evaluate(
     law: &LinearSpring,
     contacts: &mut PeriodicContacts,
     disk: &[DiskRecord],
     load: &mut [DiskLoad],
     active: &[u32],
+    block: &mut Block,
     l: &Mat2,
     dt: f64,
 ) -> (Mat2, f64) {
     let law = Law::of(law);
-    match law.bond {
-        Some(bond) => evaluate_with::<true>(&law, bond, contacts, disk, load, active, l, dt),
-        None => evaluate_with::<false>(&law, [0.0; 4], contacts, disk, load, active, l, dt),
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: `evaluate_avx2` is an ordinary safe function compiled with AVX2 enabled;
+        // the only requirement for calling it is that the CPU running it supports AVX2, which
+        // `is_x86_feature_detected!` has just checked at run time. AVX2 changes only which
+        // vector instructions the same IEEE operations compile to (Rust never contracts a
+        // product and a sum into a fused multiply-add), so the results are the same bits;
+        // the test `vector_widths_give_the_same_bits` compares both paths.
+        return unsafe { evaluate_avx2(&law, contacts, disk, load, active, block, l, dt) };
     }
+    evaluate_blocks(&law, contacts, disk, load, active, block, l, dt)
 }
 
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
 #[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn evaluate_with<const BOND: bool>(
+fn evaluate_avx2(
     law: &Law,
-    bond: [f64; 4],
     contacts: &mut PeriodicContacts,
     disk: &[DiskRecord],
     load: &mut [DiskLoad],
     active: &[u32],
+    block: &mut Block,
+    l: &Mat2,
+    dt: f64,
+) -> (Mat2, f64) {
+    evaluate_blocks(law, contacts, disk, load, active, block, l, dt)
+}
+
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn evaluate_blocks(
+    law: &Law,
+    contacts: &mut PeriodicContacts,
+    disk: &[DiskRecord],
+    load: &mut [DiskLoad],
+    active: &[u32],
+    block: &mut Block,
     l: &Mat2,
     dt: f64,
 ) -> (Mat2, f64) {
     let mut moment = Mat2::ZERO;
     let mut heat = 0.0;
-    let mut start = 0;
-    while start < active.len() {
-        let count = (active.len() - start).min(LANES);
-        // A short last group repeats its last contact in the spare lanes; their results are
-        // dropped.
-        let idx: [usize; LANES] =
-            std::array::from_fn(|j| active[start + j.min(count - 1)] as usize);
-        let out = lanes::<BOND>(law, bond, contacts, disk, &idx, l, dt);
-        for (j, &k) in idx.iter().enumerate().take(count) {
-            let h = &mut contacts.history[k];
-            h.normal = Vec2::new(out.nx[j], out.ny[j]);
-            h.shear_force = Vec2::new(out.sx[j], out.sy[j]);
-            if out.broke[j] != 0 {
-                h.bond = BondState::Broken;
-            }
-            let f = Vec2::new(out.fx[j], out.fy[j]);
-            contacts.force_on_b[k] = f;
-            let [a, b] = contacts.pair[k];
-            let la = &mut load[a as usize];
-            la.force -= f;
-            la.torque += out.ta[j];
-            let lb = &mut load[b as usize];
-            lb.force += f;
-            lb.torque += out.tb[j];
-            moment = moment.add_scaled(&Mat2::outer_vec2(f, contacts.branch[k]), 1.0);
-            heat += out.work[j];
+    for chunk in active.chunks(BLOCK) {
+        gather(contacts, disk, chunk, block, l);
+        match law.bond {
+            Some(bond) => stage_law::<true>(law, bond, block, chunk.len(), dt),
+            None => stage_law::<false>(law, [0.0; 4], block, chunk.len(), dt),
         }
-        start += count;
+        stage_force(law, block, chunk.len());
+        scatter(contacts, load, chunk, block, &mut moment, &mut heat);
     }
     (moment, heat)
 }
 
-/// What the law leaves for the contacts of one group.
-struct Out {
-    nx: Lane,
-    ny: Lane,
-    sx: Lane,
-    sy: Lane,
-    fx: Lane,
-    fy: Lane,
-    ta: Lane,
-    tb: Lane,
-    work: Lane,
-    broke: Mask,
-}
-
-/// The law on the contacts `idx` (one per lane): `ContactKinematics::<Vec2>::from_pair`,
-/// `LinearSpring::properties` and `update_contact`, operation for operation.
+/// Copies what the law needs of each contact of `chunk` into the block, and its kinematics:
+/// `ContactKinematics::<Vec2>::from_pair`'s normal, penetration and lever arms.
 #[inline(always)]
-fn lanes<const BOND: bool>(
-    law: &Law,
-    bond: [f64; 4],
+fn gather(
     contacts: &PeriodicContacts,
     disk: &[DiskRecord],
-    idx: &[usize; LANES],
+    chunk: &[u32],
+    b: &mut Block,
     l: &Mat2,
-    dt: f64,
-) -> Out {
-    // Gathers.
-    let pair: [[u32; 2]; LANES] = std::array::from_fn(|j| contacts.pair[idx[j]]);
-    let da: [&DiskRecord; LANES] = std::array::from_fn(|j| &disk[pair[j][0] as usize]);
-    let db: [&DiskRecord; LANES] = std::array::from_fn(|j| &disk[pair[j][1] as usize]);
-    let hist: [&ContactHistory<Vec2>; LANES] = std::array::from_fn(|j| &contacts.history[idx[j]]);
-    let bx = map(|j| contacts.branch[idx[j]].x);
-    let by = map(|j| contacts.branch[idx[j]].y);
-    let ra = map(|j| da[j].radius);
-    let rb = map(|j| db[j].radius);
-    let wa = map(|j| da[j].spin);
-    let wb = map(|j| db[j].spin);
-    let intact = mask(|j| hist[j].bond == BondState::Intact);
-    let hnx = map(|j| hist[j].normal.x);
-    let hny = map(|j| hist[j].normal.y);
-    let hsx = map(|j| hist[j].shear_force.x);
-    let hsy = map(|j| hist[j].shear_force.y);
-    let ref_pen = map(|j| hist[j].reference_penetration);
-    // Relative velocity `v_b − v_a + L b` (B-Eq. 45).
+) {
     let m = &l.0;
-    let rvx = map(|j| (db[j].velocity.x - da[j].velocity.x) + (m[0][0] * bx[j] + m[0][1] * by[j]));
-    let rvy = map(|j| (db[j].velocity.y - da[j].velocity.y) + (m[1][0] * bx[j] + m[1][1] * by[j]));
+    for (i, &k) in chunk.iter().enumerate() {
+        let k = k as usize;
+        let [ia, ib] = contacts.pair[k];
+        let (da, db) = (&disk[ia as usize], &disk[ib as usize]);
+        let branch = contacts.branch[k];
+        let h = &contacts.history[k];
+        b.bx[i] = branch.x;
+        b.by[i] = branch.y;
+        b.ra[i] = da.radius;
+        b.rb[i] = db.radius;
+        b.wa[i] = da.spin;
+        b.wb[i] = db.spin;
+        // Relative velocity `v_b − v_a + L b` (B-Eq. 45).
+        b.rvx[i] = (db.velocity.x - da.velocity.x) + (m[0][0] * branch.x + m[0][1] * branch.y);
+        b.rvy[i] = (db.velocity.y - da.velocity.y) + (m[1][0] * branch.x + m[1][1] * branch.y);
+        b.temperature[i] = 0.5 * (da.temperature + db.temperature);
+        b.hnx[i] = h.normal.x;
+        b.hny[i] = h.normal.y;
+        b.hsx[i] = h.shear_force.x;
+        b.hsy[i] = h.shear_force.y;
+        b.ref_pen[i] = h.reference_penetration;
+        b.intact[i] = flag(h.bond == BondState::Intact);
+    }
+    let n = chunk.len();
+    assert!(n <= BLOCK);
+    for i in 0..n {
+        let (bx, by, ra, rb) = (b.bx[i], b.by[i], b.ra[i], b.rb[i]);
+        let distance = (bx * bx + by * by).sqrt();
+        let inv = 1.0 / distance;
+        let positive = distance > 0.0;
+        b.nx[i] = if positive { bx * inv } else { 1.0 };
+        b.ny[i] = if positive { by * inv } else { 0.0 };
+        let penetration = ra + rb - distance;
+        b.arm_a[i] = ra - 0.5 * penetration;
+        b.arm_b[i] = rb - 0.5 * penetration;
+        b.overlap[i] = penetration - b.ref_pen[i];
+    }
+}
 
-    // ContactKinematics::from_pair.
-    let distance = map(|j| (bx[j] * bx[j] + by[j] * by[j]).sqrt());
-    let inv = map(|j| 1.0 / distance[j]);
-    let positive = mask(|j| distance[j] > 0.0);
-    let nx = select(&positive, &map(|j| bx[j] * inv[j]), &[1.0; LANES]);
-    let ny = select(&positive, &map(|j| by[j] * inv[j]), &[0.0; LANES]);
-    let penetration = map(|j| ra[j] + rb[j] - distance[j]);
-    let arm_a = map(|j| ra[j] - 0.5 * penetration[j]);
-    let arm_b = map(|j| rb[j] - 0.5 * penetration[j]);
-    let omega = map(|j| wa[j] * arm_a[j] + wb[j] * arm_b[j]);
-    // v_rel = rv − ω × n with ω × n = (−ω n_y, ω n_x).
-    let vx = map(|j| rvx[j] - -omega[j] * ny[j]);
-    let vy = map(|j| rvy[j] - omega[j] * nx[j]);
-    let vn = map(|j| vx[j] * nx[j] + vy[j] * ny[j]);
-    let six = map(|j| (vx[j] - nx[j] * vn[j]) * dt);
-    let siy = map(|j| (vy[j] - ny[j] * vn[j]) * dt);
-
-    // LinearSpring::properties (bond strengths only; the rest are constants).
-    let (tensile, bond_shear) = if BOND {
-        let [beta, ts, t_ref, ratio] = bond;
-        let temperature = map(|j| 0.5 * (da[j].temperature + db[j].temperature));
-        let mean_radius = map(|j| 0.5 * (ra[j] + rb[j]));
-        let rise = map(|j| temperature[j] - t_ref);
-        let coefficient = map(|j| {
-            if rise[j] <= ts {
-                beta * (ts - rise[j]) / ts
+/// The rest of `from_pair` (shear increment), `LinearSpring::properties` (bond strengths)
+/// and `update_contact` up to the Coulomb test: trial shear force, its squared norm, the
+/// limit, and the state flags.
+#[inline(always)]
+fn stage_law<const BOND: bool>(law: &Law, bond: [f64; 4], b: &mut Block, n: usize, dt: f64) {
+    assert!(n <= BLOCK);
+    let [beta, ts, t_ref, ratio] = bond;
+    for i in 0..n {
+        let (nx, ny) = (b.nx[i], b.ny[i]);
+        let (arm_a, arm_b) = (b.arm_a[i], b.arm_b[i]);
+        let omega = b.wa[i] * arm_a + b.wb[i] * arm_b;
+        // v_rel = rv − ω × n with ω × n = (−ω n_y, ω n_x).
+        let vx = b.rvx[i] - -omega * ny;
+        let vy = b.rvy[i] - omega * nx;
+        let vn = vx * nx + vy * ny;
+        let six = (vx - nx * vn) * dt;
+        let siy = (vy - ny * vn) * dt;
+        let (tensile, bond_shear) = if BOND {
+            let mean_radius = 0.5 * (b.ra[i] + b.rb[i]);
+            let rise = b.temperature[i] - t_ref;
+            let coefficient = if rise <= ts {
+                beta * (ts - rise) / ts
             } else {
                 0.0
-            }
-        });
-        let fnb = map(|j| coefficient[j] * law.kn * mean_radius[j]);
-        (fnb, map(|j| ratio * fnb[j]))
-    } else {
-        ([0.0; LANES], [0.0; LANES])
-    };
+            };
+            let fnb = coefficient * law.kn * mean_radius;
+            (fnb, ratio * fnb)
+        } else {
+            (0.0, 0.0)
+        };
+        let (hnx, hny, hsx, hsy) = (b.hnx[i], b.hny[i], b.hsx[i], b.hsy[i]);
+        let unset = hnx == 0.0 && hny == 0.0;
+        let ox = if unset { nx } else { hnx };
+        let oy = if unset { ny } else { hny };
+        let overlap = b.overlap[i];
+        let intact = b.intact[i] != 0;
+        // carry_tangential(shear, old normal, normal).
+        let c = ox * nx + oy * ny;
+        let flipped = c <= -1.0 + 1e-12;
+        let vdn = hsx * nx + hsy * ny;
+        let along = ox * hsy - oy * hsx;
+        let rx = if flipped { hsx - nx * vdn } else { -ny * along };
+        let ry = if flipped { hsy - ny * vdn } else { nx * along };
+        let normal_force = law.kn * overlap;
+        let sx = rx - six * law.kt;
+        let sy = ry - siy * law.kt;
+        let s2 = sx * sx + sy * sy;
+        let tension = -normal_force > tensile;
+        let strength = max0(bond_shear + 0.0);
+        let sheared = s2 > strength * strength;
+        let broke = intact & (tension | sheared);
+        let bonded = intact & !broke;
+        let compressive = max0(normal_force);
+        let limit = compressive * law.mu;
+        let separated = !intact & (overlap <= 0.0);
+        b.sx[i] = sx;
+        b.sy[i] = sy;
+        b.s2[i] = s2;
+        b.limit[i] = limit;
+        b.normal_force[i] = if bonded { normal_force } else { compressive };
+        b.sliding[i] = flag(!bonded & (s2 > limit * limit));
+        b.separated[i] = flag(separated);
+        b.broke[i] = flag(broke & !separated);
+    }
+}
 
-    // update_contact.
-    let unset = mask(|j| hnx[j] == 0.0 && hny[j] == 0.0);
-    let ox = select(&unset, &nx, &hnx);
-    let oy = select(&unset, &ny, &hny);
-    let overlap = map(|j| penetration[j] - ref_pen[j]);
-    let separated = and_not(&mask(|j| overlap[j] <= 0.0), &intact);
-    // carry_tangential(shear, old normal, normal).
-    let c = map(|j| ox[j] * nx[j] + oy[j] * ny[j]);
-    let flipped = mask(|j| c[j] <= -1.0 + 1e-12);
-    let vdn = map(|j| hsx[j] * nx[j] + hsy[j] * ny[j]);
-    let along = map(|j| ox[j] * hsy[j] - oy[j] * hsx[j]);
-    let rx = select(
-        &flipped,
-        &map(|j| hsx[j] - nx[j] * vdn[j]),
-        &map(|j| -ny[j] * along[j]),
-    );
-    let ry = select(
-        &flipped,
-        &map(|j| hsy[j] - ny[j] * vdn[j]),
-        &map(|j| nx[j] * along[j]),
-    );
-    let normal_force = map(|j| law.kn * overlap[j]);
-    let sx = map(|j| rx[j] - six[j] * law.kt);
-    let sy = map(|j| ry[j] - siy[j] * law.kt);
-    let s2 = map(|j| sx[j] * sx[j] + sy[j] * sy[j]);
-    let tension = mask(|j| -normal_force[j] > tensile[j]);
-    let strength = map(|j| max0(bond_shear[j] + 0.0));
-    let sheared = mask(|j| s2[j] > strength[j] * strength[j]);
-    let broke = and(&intact, &or(&tension, &sheared));
-    let bonded = and_not(&intact, &broke);
-    // Coulomb limit of an unbonded (or just broken) contact.
-    let compressive = map(|j| max0(normal_force[j]));
-    let limit = map(|j| compressive[j] * law.mu);
-    let sliding = and_not(&mask(|j| s2[j] > limit[j] * limit[j]), &bonded);
-    let trial = map(|j| s2[j].sqrt());
-    let scale = map(|j| limit[j] / trial[j]);
-    let moving = mask(|j| trial[j] > 0.0);
-    let slid_x = select(&moving, &map(|j| sx[j] * scale[j]), &[0.0; LANES]);
-    let slid_y = select(&moving, &map(|j| sy[j] * scale[j]), &[0.0; LANES]);
-    let work_sliding = if law.kt > 0.0 {
-        map(|j| limit[j] * (trial[j] - limit[j]) / law.kt)
-    } else {
-        [0.0; LANES]
-    };
-    let fn_final = select(&bonded, &normal_force, &compressive);
-    let shear_x = select(&sliding, &slid_x, &sx);
-    let shear_y = select(&sliding, &slid_y, &sy);
-    let work = select(&sliding, &work_sliding, &[0.0; LANES]);
-    let fx = map(|j| nx[j] * fn_final[j] + shear_x[j]);
-    let fy = map(|j| ny[j] * fn_final[j] + shear_y[j]);
-    let moment = map(|j| nx[j] * fy[j] - ny[j] * fx[j]);
-    let ta = map(|j| moment[j] * -arm_a[j]);
-    let tb = map(|j| moment[j] * -arm_b[j]);
+/// The Coulomb slip of `update_contact` and the force and torques of its response; zero for
+/// a separated contact (unbonded, no overlap).
+#[inline(always)]
+fn stage_force(law: &Law, b: &mut Block, n: usize) {
+    assert!(n <= BLOCK);
+    let kt_positive = law.kt > 0.0;
+    for i in 0..n {
+        let (sx, sy, s2, limit) = (b.sx[i], b.sy[i], b.s2[i], b.limit[i]);
+        let trial = s2.sqrt();
+        let scale = limit / trial;
+        let moving = trial > 0.0;
+        let slid_x = if moving { sx * scale } else { 0.0 };
+        let slid_y = if moving { sy * scale } else { 0.0 };
+        let work_sliding = if kt_positive {
+            limit * (trial - limit) / law.kt
+        } else {
+            0.0
+        };
+        let sliding = b.sliding[i] != 0;
+        let shear_x = if sliding { slid_x } else { sx };
+        let shear_y = if sliding { slid_y } else { sy };
+        let work = if sliding { work_sliding } else { 0.0 };
+        let (nx, ny, fn_) = (b.nx[i], b.ny[i], b.normal_force[i]);
+        let fx = nx * fn_ + shear_x;
+        let fy = ny * fn_ + shear_y;
+        let moment = nx * fy - ny * fx;
+        let ta = moment * -b.arm_a[i];
+        let tb = moment * -b.arm_b[i];
+        let separated = b.separated[i] != 0;
+        b.sx[i] = if separated { 0.0 } else { shear_x };
+        b.sy[i] = if separated { 0.0 } else { shear_y };
+        b.fx[i] = if separated { 0.0 } else { fx };
+        b.fy[i] = if separated { 0.0 } else { fy };
+        b.ta[i] = if separated { 0.0 } else { ta };
+        b.tb[i] = if separated { 0.0 } else { tb };
+        b.work[i] = if separated { 0.0 } else { work };
+    }
+}
 
-    // A separated contact (unbonded, no overlap) keeps its new normal and nothing else.
-    let zero = [0.0; LANES];
-    Out {
-        nx,
-        ny,
-        sx: select(&separated, &zero, &shear_x),
-        sy: select(&separated, &zero, &shear_y),
-        fx: select(&separated, &zero, &fx),
-        fy: select(&separated, &zero, &fy),
-        ta: select(&separated, &zero, &ta),
-        tb: select(&separated, &zero, &tb),
-        work: select(&separated, &zero, &work),
-        broke: and_not(&broke, &separated),
+/// Writes the block's results back (history, force) and sums them in list order.
+#[inline(always)]
+fn scatter(
+    contacts: &mut PeriodicContacts,
+    load: &mut [DiskLoad],
+    chunk: &[u32],
+    b: &Block,
+    moment: &mut Mat2,
+    heat: &mut f64,
+) {
+    for (i, &k) in chunk.iter().enumerate() {
+        let k = k as usize;
+        let h = &mut contacts.history[k];
+        h.normal = Vec2::new(b.nx[i], b.ny[i]);
+        h.shear_force = Vec2::new(b.sx[i], b.sy[i]);
+        if b.broke[i] != 0 {
+            h.bond = BondState::Broken;
+        }
+        let f = Vec2::new(b.fx[i], b.fy[i]);
+        contacts.force_on_b[k] = f;
+        let [a, bb] = contacts.pair[k];
+        let la = &mut load[a as usize];
+        la.force -= f;
+        la.torque += b.ta[i];
+        let lb = &mut load[bb as usize];
+        lb.force += f;
+        lb.torque += b.tb[i];
+        *moment = moment.add_scaled(&Mat2::outer_vec2(f, contacts.branch[k]), 1.0);
+        *heat += b.work[i];
     }
 }

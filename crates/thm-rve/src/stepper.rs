@@ -26,7 +26,7 @@
 //! returns stress, heat source and conductivity (B-Eqs. 33, 34, 49).
 
 use crate::error::{RveError, check_positive};
-use crate::kernel::{self, DiskLoad, DiskRecord};
+use crate::kernel::{self, Block, DiskLoad, DiskRecord};
 use crate::mat2::Mat2;
 use crate::measure;
 use crate::neighbour::{Candidate, PeriodicGrid};
@@ -72,6 +72,7 @@ pub struct RveStepper {
     disk: Vec<DiskRecord>,
     load: Vec<DiskLoad>,
     active: Vec<u32>,
+    block: Box<Block>,
 }
 
 impl RveStepper {
@@ -86,6 +87,7 @@ impl RveStepper {
             disk: Vec::new(),
             load: Vec::new(),
             active: Vec::new(),
+            block: Block::new(),
         }
     }
 
@@ -101,6 +103,7 @@ impl RveStepper {
             + cap(&self.disk)
             + cap(&self.load)
             + cap(&self.active)
+            + std::mem::size_of::<Block>()
     }
 
     /// The configuration.
@@ -276,6 +279,7 @@ impl RveStepper {
             &self.disk,
             &mut self.load,
             &self.active,
+            &mut self.block,
             l,
             dt,
         );
