@@ -14,16 +14,16 @@
 //! scalar law computes for it, in the same order, and a select only picks among them, so its
 //! result has the law's bits.
 //!
-//! Two passes: [`classify`] computes every pair's periodic branch vector, settles the pairs
-//! that are apart and unbonded (the law would return zero) and lists the others;
-//! [`evaluate`] runs the law on the listed ones, block by block, and sums disk forces,
-//! torques, the contact moment and the friction work in list order (the order of the scalar
-//! loop, so the sums have its bits too). On x86-64 processors with AVX2 the same code runs
+//! One pass over the pair list ([`contact_forces`]) computes every pair's periodic branch
+//! vector, settles the pairs that are apart and unbonded (the law would return zero) and
+//! collects the others into the block; each full block runs through the law and is summed
+//! into disk forces, torques, the contact moment and the friction work in list order (the
+//! order of the scalar loop, so the sums have its bits too). On x86-64 processors with AVX2 the same code runs
 //! compiled for AVX2 (four contacts per instruction instead of two).
 
 use crate::mat2::Mat2;
 use crate::state::PeriodicContacts;
-use thm_dem::{BondState, LinearSpring, Vec2};
+use thm_dem::{BondState, ContactHistory, LinearSpring, Vec2};
 
 /// What a contact needs of a disk, in one record.
 #[derive(Debug, Clone, Copy, Default)]
@@ -78,43 +78,6 @@ fn max0(x: f64) -> f64 {
     if x > 0.0 { x } else { 0.0 }
 }
 
-/// Pass 1: branch vectors of every pair (stored in `contacts.branch`), the apart and
-/// unbonded pairs zeroed (history and force, as the scalar loop's early exit does), the others'
-/// indices into `active`, in list order.
-pub(crate) fn classify(
-    contacts: &mut PeriodicContacts,
-    disk: &[DiskRecord],
-    h: &Mat2,
-    active: &mut Vec<u32>,
-) {
-    active.clear();
-    if active.capacity() < contacts.pair.capacity() {
-        active.reserve_exact(contacts.pair.capacity() - active.len());
-    }
-    for (k, ((((pair, shift), history), force_on_b), branch_out)) in contacts
-        .pair
-        .iter()
-        .zip(&contacts.shift)
-        .zip(contacts.history.iter_mut())
-        .zip(contacts.force_on_b.iter_mut())
-        .zip(contacts.branch.iter_mut())
-        .enumerate()
-    {
-        let (da, db) = (&disk[pair[0] as usize], &disk[pair[1] as usize]);
-        let lattice = h.apply_vec2(Vec2::new(f64::from(shift[0]), f64::from(shift[1])));
-        let branch = db.position + lattice - da.position;
-        *branch_out = branch;
-        let reach = da.radius + db.radius;
-        if history.bond != BondState::Intact && branch.norm_squared() >= reach * reach {
-            history.shear_force = Vec2::ZERO;
-            history.normal = Vec2::ZERO;
-            *force_on_b = Vec2::ZERO;
-        } else {
-            active.push(k as u32);
-        }
-    }
-}
-
 /// Contacts evaluated per block: the block's scratch (about 30 arrays) stays in L1.
 pub(crate) const BLOCK: usize = 64;
 
@@ -122,6 +85,7 @@ pub(crate) const BLOCK: usize = 64;
 /// each stage below is a plain loop the compiler vectorises).
 #[derive(Clone)]
 pub(crate) struct Block {
+    index: [u32; BLOCK],
     bx: [f64; BLOCK],
     by: [f64; BLOCK],
     ra: [f64; BLOCK],
@@ -162,6 +126,7 @@ impl Block {
         let z = [0.0; BLOCK];
         let u = [0; BLOCK];
         Box::new(Self {
+            index: [0; BLOCK],
             bx: z,
             by: z,
             ra: z,
@@ -211,111 +176,160 @@ fn flag(c: bool) -> u64 {
     if c { u64::MAX } else { 0 }
 }
 
-/// Pass 2: the law on the `active` contacts, a [`BLOCK`] at a time; sums into `load` (which
-/// must be zero on entry), and returns the contact moment `Σ f ⊗ b` and the friction work.
+/// The contact loop: for every listed pair in list order, its periodic branch vector `b =
+/// x_b + H s − x_a` (stored in `contacts.branch`); a pair apart and unbonded is settled at
+/// once (the law would return zero and clear its history: no force, nothing summed); the
+/// others are collected into a block, and each full block goes through the law
+/// ([`stage_kinematics`], [`stage_law`], [`stage_force`]) and is summed into `load` (zero on
+/// entry), the contact moment `Σ f ⊗ b` and the friction work, in list order. Returns the
+/// moment and the work.
 #[allow(clippy::too_many_arguments)]
 #[allow(unsafe_code)] // One call, proven below.
-pub(crate) fn evaluate(
+pub(crate) fn contact_forces(
     law: &LinearSpring,
     contacts: &mut PeriodicContacts,
     disk: &[DiskRecord],
     load: &mut [DiskLoad],
-    active: &[u32],
     block: &mut Block,
+    h: &Mat2,
     l: &Mat2,
     dt: f64,
 ) -> (Mat2, f64) {
     let law = Law::of(law);
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: `evaluate_avx2` is an ordinary safe function compiled with AVX2 enabled;
-        // the only requirement for calling it is that the CPU running it supports AVX2, which
-        // `is_x86_feature_detected!` has just checked at run time. AVX2 changes only which
-        // vector instructions the same IEEE operations compile to (Rust never contracts a
-        // product and a sum into a fused multiply-add), so the results are the same bits;
-        // the test `vector_widths_give_the_same_bits` compares both paths.
-        return unsafe { evaluate_avx2(&law, contacts, disk, load, active, block, l, dt) };
+        // SAFETY: `contact_forces_avx2` is an ordinary safe function compiled with AVX2
+        // enabled; the only requirement for calling it is that the processor running it
+        // supports AVX2, which `is_x86_feature_detected!` has just checked at run time. AVX2
+        // changes only which vector instructions the same IEEE operations compile to (Rust
+        // never contracts a product and a sum into a fused multiply-add), so the results are
+        // the same bits; the test `avx2_and_baseline_give_the_same_bits` compares both paths.
+        return unsafe { contact_forces_avx2(&law, contacts, disk, load, block, h, l, dt) };
     }
-    evaluate_blocks(&law, contacts, disk, load, active, block, l, dt)
+    contact_forces_with(&law, contacts, disk, load, block, h, l, dt)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[allow(clippy::too_many_arguments)]
-fn evaluate_avx2(
+fn contact_forces_avx2(
     law: &Law,
     contacts: &mut PeriodicContacts,
     disk: &[DiskRecord],
     load: &mut [DiskLoad],
-    active: &[u32],
     block: &mut Block,
+    h: &Mat2,
     l: &Mat2,
     dt: f64,
 ) -> (Mat2, f64) {
-    evaluate_blocks(law, contacts, disk, load, active, block, l, dt)
+    contact_forces_with(law, contacts, disk, load, block, h, l, dt)
 }
 
+/// [`contact_forces`] without the run-time choice (the baseline instruction set).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn evaluate_blocks(
+fn contact_forces_with(
     law: &Law,
     contacts: &mut PeriodicContacts,
     disk: &[DiskRecord],
     load: &mut [DiskLoad],
-    active: &[u32],
     block: &mut Block,
+    h: &Mat2,
     l: &Mat2,
     dt: f64,
 ) -> (Mat2, f64) {
     let mut moment = Mat2::ZERO;
     let mut heat = 0.0;
-    for chunk in active.chunks(BLOCK) {
-        gather(contacts, disk, chunk, block, l);
-        match law.bond {
-            Some(bond) => stage_law::<true>(law, bond, block, chunk.len(), dt),
-            None => stage_law::<false>(law, [0.0; 4], block, chunk.len(), dt),
+    let m = &l.0;
+    let len = contacts.len();
+    let pairs = &contacts.pair[..len];
+    let shifts = &contacts.shift[..len];
+    let histories = &mut contacts.history[..len];
+    let forces = &mut contacts.force_on_b[..len];
+    let branches = &mut contacts.branch[..len];
+    let mut n = 0;
+    for k in 0..len {
+        let pair = pairs[k];
+        let shift = shifts[k];
+        let (da, db) = (&disk[pair[0] as usize], &disk[pair[1] as usize]);
+        let lattice = h.apply_vec2(Vec2::new(f64::from(shift[0]), f64::from(shift[1])));
+        let branch = db.position + lattice - da.position;
+        branches[k] = branch;
+        let reach = da.radius + db.radius;
+        let history = &mut histories[k];
+        if history.bond != BondState::Intact && branch.norm_squared() >= reach * reach {
+            history.shear_force = Vec2::ZERO;
+            history.normal = Vec2::ZERO;
+            forces[k] = Vec2::ZERO;
+            continue;
         }
-        stage_force(law, block, chunk.len());
-        scatter(contacts, load, chunk, block, &mut moment, &mut heat);
+        let b = &mut *block;
+        b.index[n] = k as u32;
+        b.bx[n] = branch.x;
+        b.by[n] = branch.y;
+        b.ra[n] = da.radius;
+        b.rb[n] = db.radius;
+        b.wa[n] = da.spin;
+        b.wb[n] = db.spin;
+        // Relative velocity `v_b − v_a + L b` (B-Eq. 45).
+        b.rvx[n] = (db.velocity.x - da.velocity.x) + (m[0][0] * branch.x + m[0][1] * branch.y);
+        b.rvy[n] = (db.velocity.y - da.velocity.y) + (m[1][0] * branch.x + m[1][1] * branch.y);
+        b.temperature[n] = 0.5 * (da.temperature + db.temperature);
+        b.hnx[n] = history.normal.x;
+        b.hny[n] = history.normal.y;
+        b.hsx[n] = history.shear_force.x;
+        b.hsy[n] = history.shear_force.y;
+        b.ref_pen[n] = history.reference_penetration;
+        b.intact[n] = flag(history.bond == BondState::Intact);
+        n += 1;
+        if n == BLOCK {
+            run_block(law, block, n, dt);
+            scatter(
+                pairs,
+                branches,
+                histories,
+                forces,
+                load,
+                block,
+                n,
+                &mut moment,
+                &mut heat,
+            );
+            n = 0;
+        }
+    }
+    if n > 0 {
+        run_block(law, block, n, dt);
+        scatter(
+            pairs,
+            branches,
+            histories,
+            forces,
+            load,
+            block,
+            n,
+            &mut moment,
+            &mut heat,
+        );
     }
     (moment, heat)
 }
 
-/// Copies what the law needs of each contact of `chunk` into the block, and its kinematics:
-/// `ContactKinematics::<Vec2>::from_pair`'s normal, penetration and lever arms.
+/// The law on the first `n` contacts of a block.
 #[inline(always)]
-fn gather(
-    contacts: &PeriodicContacts,
-    disk: &[DiskRecord],
-    chunk: &[u32],
-    b: &mut Block,
-    l: &Mat2,
-) {
-    let m = &l.0;
-    for (i, &k) in chunk.iter().enumerate() {
-        let k = k as usize;
-        let [ia, ib] = contacts.pair[k];
-        let (da, db) = (&disk[ia as usize], &disk[ib as usize]);
-        let branch = contacts.branch[k];
-        let h = &contacts.history[k];
-        b.bx[i] = branch.x;
-        b.by[i] = branch.y;
-        b.ra[i] = da.radius;
-        b.rb[i] = db.radius;
-        b.wa[i] = da.spin;
-        b.wb[i] = db.spin;
-        // Relative velocity `v_b − v_a + L b` (B-Eq. 45).
-        b.rvx[i] = (db.velocity.x - da.velocity.x) + (m[0][0] * branch.x + m[0][1] * branch.y);
-        b.rvy[i] = (db.velocity.y - da.velocity.y) + (m[1][0] * branch.x + m[1][1] * branch.y);
-        b.temperature[i] = 0.5 * (da.temperature + db.temperature);
-        b.hnx[i] = h.normal.x;
-        b.hny[i] = h.normal.y;
-        b.hsx[i] = h.shear_force.x;
-        b.hsy[i] = h.shear_force.y;
-        b.ref_pen[i] = h.reference_penetration;
-        b.intact[i] = flag(h.bond == BondState::Intact);
+fn run_block(law: &Law, block: &mut Block, n: usize, dt: f64) {
+    stage_kinematics(block, n);
+    match law.bond {
+        Some(bond) => stage_law::<true>(law, bond, block, n, dt),
+        None => stage_law::<false>(law, [0.0; 4], block, n, dt),
     }
-    let n = chunk.len();
+    stage_force(law, block, n);
+}
+
+/// `ContactKinematics::<Vec2>::from_pair`'s normal, penetration and lever arms, and the
+/// overlap beyond the bond's reference penetration.
+#[inline(always)]
+fn stage_kinematics(b: &mut Block, n: usize) {
     assert!(n <= BLOCK);
     for i in 0..n {
         let (bx, by, ra, rb) = (b.bx[i], b.by[i], b.ra[i], b.rb[i]);
@@ -436,34 +450,40 @@ fn stage_force(law: &Law, b: &mut Block, n: usize) {
     }
 }
 
-/// Writes the block's results back (history, force) and sums them in list order.
+/// Writes the results of the first `n` contacts of a block back (history, force) and sums
+/// them in list order.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn scatter(
-    contacts: &mut PeriodicContacts,
+    pairs: &[[u32; 2]],
+    branches: &[Vec2],
+    histories: &mut [ContactHistory<Vec2>],
+    forces: &mut [Vec2],
     load: &mut [DiskLoad],
-    chunk: &[u32],
     b: &Block,
+    n: usize,
     moment: &mut Mat2,
     heat: &mut f64,
 ) {
-    for (i, &k) in chunk.iter().enumerate() {
-        let k = k as usize;
-        let h = &mut contacts.history[k];
+    assert!(n <= BLOCK);
+    for i in 0..n {
+        let k = b.index[i] as usize;
+        let h = &mut histories[k];
         h.normal = Vec2::new(b.nx[i], b.ny[i]);
         h.shear_force = Vec2::new(b.sx[i], b.sy[i]);
         if b.broke[i] != 0 {
             h.bond = BondState::Broken;
         }
         let f = Vec2::new(b.fx[i], b.fy[i]);
-        contacts.force_on_b[k] = f;
-        let [a, bb] = contacts.pair[k];
-        let la = &mut load[a as usize];
+        forces[k] = f;
+        let [ia, ib] = pairs[k];
+        let la = &mut load[ia as usize];
         la.force -= f;
         la.torque += b.ta[i];
-        let lb = &mut load[bb as usize];
+        let lb = &mut load[ib as usize];
         lb.force += f;
         lb.torque += b.tb[i];
-        *moment = moment.add_scaled(&Mat2::outer_vec2(f, contacts.branch[k]), 1.0);
+        *moment = moment.add_scaled(&Mat2::outer_vec2(f, branches[k]), 1.0);
         *heat += b.work[i];
     }
 }

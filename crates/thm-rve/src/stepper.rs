@@ -71,7 +71,6 @@ pub struct RveStepper {
     temperature: Vec<f64>,
     disk: Vec<DiskRecord>,
     load: Vec<DiskLoad>,
-    active: Vec<u32>,
     block: Box<Block>,
 }
 
@@ -86,7 +85,6 @@ impl RveStepper {
             temperature: Vec::new(),
             disk: Vec::new(),
             load: Vec::new(),
-            active: Vec::new(),
             block: Block::new(),
         }
     }
@@ -102,7 +100,6 @@ impl RveStepper {
             + cap(&self.temperature)
             + cap(&self.disk)
             + cap(&self.load)
-            + cap(&self.active)
             + std::mem::size_of::<Block>()
     }
 
@@ -272,14 +269,13 @@ impl RveStepper {
         self.load.clear();
         self.load.resize(disks.len(), DiskLoad::default());
         let h = *state.cell.matrix();
-        kernel::classify(&mut state.contacts, &self.disk, &h, &mut self.active);
-        let (moment, heat) = kernel::evaluate(
+        let (moment, heat) = kernel::contact_forces(
             law,
             &mut state.contacts,
             &self.disk,
             &mut self.load,
-            &self.active,
             &mut self.block,
+            &h,
             l,
             dt,
         );
