@@ -466,13 +466,6 @@ fn scatter(
     heat: &mut f64,
 ) {
     assert!(n <= BLOCK);
-    // The load of a run of contacts sharing disk `a` (the list is sorted by pair, so its
-    // contacts as `a` come together) is summed in a register and stored once: the same
-    // additions in the same order as summing in memory, without the store-to-load wait
-    // between consecutive contacts. A disk that turns up as `b` while held is stored first,
-    // so any list order gives the sums of the plain loop.
-    let mut held = usize::MAX;
-    let mut acc = DiskLoad::default();
     for i in 0..n {
         let k = b.index[i] as usize;
         let h = &mut histories[k];
@@ -484,28 +477,14 @@ fn scatter(
         let f = Vec2::new(b.fx[i], b.fy[i]);
         forces[k] = f;
         let [ia, ib] = pairs[k];
-        let (ia, ib) = (ia as usize, ib as usize);
-        if ia != held {
-            if held != usize::MAX {
-                load[held] = acc;
-            }
-            held = ia;
-            acc = load[ia];
-        }
-        acc.force -= f;
-        acc.torque += b.ta[i];
-        if ib == held {
-            load[held] = acc;
-            held = usize::MAX;
-        }
-        let lb = &mut load[ib];
+        let la = &mut load[ia as usize];
+        la.force -= f;
+        la.torque += b.ta[i];
+        let lb = &mut load[ib as usize];
         lb.force += f;
         lb.torque += b.tb[i];
         *moment = moment.add_scaled(&Mat2::outer_vec2(f, branches[k]), 1.0);
         *heat += b.work[i];
-    }
-    if held != usize::MAX {
-        load[held] = acc;
     }
 }
 
