@@ -224,9 +224,17 @@ impl RveStepper {
             .zip(&a.radius)
         {
             let d = Vec2::from_xy(*x) - h.apply_vec2(Vec2::from_xy(*x0));
-            max_disp2 = max_disp2.max(d.norm_squared());
-            max_growth = max_growth.max(r - r0);
-            r_max = r_max.max(*r0);
+            // Selects rather than `f64::max` (which also orders ±0 and skips NaN in a longer
+            // sequence): the same maxima up to the sign of a zero, which the test below
+            // cannot see, so the same decision, and a loop the compiler vectorises.
+            let (d2, growth) = (d.norm_squared(), r - r0);
+            max_disp2 = if d2 > max_disp2 { d2 } else { max_disp2 };
+            max_growth = if growth > max_growth {
+                growth
+            } else {
+                max_growth
+            };
+            r_max = if *r0 > r_max { *r0 } else { r_max };
         }
         let used = 2.0 * max_disp2.sqrt() + e * (2.0 * r_max + a.skin) + 2.0 * max_growth;
         !used.is_finite() || used >= a.skin
@@ -347,7 +355,8 @@ impl RveStepper {
                     |((((((((x, v), w), &m), &inertia), f), t), &radius), &temperature)| {
                         let (x_new, v_new, w_new) =
                             advance(x, v, w, m, inertia, f, t, l, dt, alpha);
-                        finite &= v_new.is_finite() && w_new.is_finite() && x_new.is_finite();
+                        // `&`, not `&&`: no branch per disk.
+                        finite &= v_new.is_finite() & w_new.is_finite() & x_new.is_finite();
                         DiskRecord {
                             position: x_new,
                             velocity: v_new,
