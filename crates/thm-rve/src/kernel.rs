@@ -18,8 +18,8 @@
 //! vector, settles the pairs that are apart and unbonded (the law would return zero) and
 //! collects the others into the block; each full block runs through the law and is summed
 //! into disk forces, torques, the contact moment and the friction work in list order (the
-//! order of the scalar loop, so the sums have its bits too). On x86-64 processors with AVX2 the same code runs
-//! compiled for AVX2 (four contacts per instruction instead of two).
+//! order of the scalar loop, so the sums have its bits too). On x86-64 processors with AVX2
+//! the same code runs compiled for AVX2 (four contacts per instruction instead of two).
 
 use crate::mat2::Mat2;
 use crate::state::PeriodicContacts;
@@ -71,8 +71,9 @@ impl Law {
     }
 }
 
-/// `x.max(0.0)` as the law's `f64::max` compiles it on x86-64 (`maxsd x, 0`): `x` when
-/// `x > 0`, else `+0` (NaN and `−0` included), written as a select so that it packs.
+/// `x.max(0.0)` as the law's `f64::max` compiles on x86-64 (`maxsd x, 0`, whose equal or
+/// NaN case returns the second operand; AArch64's `fmaxnm` agrees): `x` when `x > 0`, else
+/// `+0` (NaN and `−0` included), written as a select so that it vectorises.
 #[inline(always)]
 fn max0(x: f64) -> f64 {
     if x > 0.0 { x } else { 0.0 }

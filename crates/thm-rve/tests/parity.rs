@@ -376,16 +376,27 @@ fn reference_run(case: &Case) -> (Vec<Vec<u64>>, Vec<Vec<u64>>) {
     let mut states = case.states.clone();
     let mut r = reference::Reference::new(case.config);
     let (mut s_bits, mut r_bits) = (Vec::new(), Vec::new());
+    let (mut reduced, mut rebuilds) = (0, 0);
     for k in 0..STEPS {
         for (i, s) in states.iter_mut().enumerate() {
+            let anchor = s.anchor.cell;
             let resp = r.respond(s, &case.load(i, k));
+            rebuilds += usize::from(s.anchor.cell != anchor);
             r_bits.push(response_bits(&resp));
             s_bits.push(state_bits(s));
             if k % 10 == 9 {
-                s.reduce_cell().unwrap();
+                reduced += usize::from(s.reduce_cell().unwrap());
             }
         }
     }
+    assert!(
+        reduced > 0 && rebuilds > STEPS as usize,
+        "{reduced} reductions, {rebuilds} rebuilds"
+    );
+    assert!(
+        states.iter().all(|s| s.friction_heat_total > 0.0),
+        "every RVE slides"
+    );
     // The case must exercise what it claims: bonds broken by melting and shear, a large
     // shear, rebuilds.
     let intact: usize = states.iter().map(|s| s.contacts.intact_bond_count()).sum();
