@@ -43,6 +43,16 @@ pub struct MpmParameters {
     /// problem of GIMP). 0 (the default): every node with mass is updated.
     #[serde(default)]
     pub node_mass_tolerance: f64,
+    /// Instead of leaving a node at or below `node_mass_tolerance` out, merge it with the
+    /// heavier of its two neighbours along its node row whose mass is above the tolerance:
+    /// both take the acceleration of their summed force over their summed mass, so the force
+    /// the small node carries (a share of its points' internal force and of their loads) is
+    /// kept and its velocity does not run away from its neighbour's. A small node with no
+    /// such neighbour is left out as without merging. Along rows only: the
+    /// sides of a specimen that bulges sideways (a biaxial test's confined sides). Default
+    /// false: left out, as above.
+    #[serde(default)]
+    pub merge_small_mass_nodes: bool,
     /// Body force per unit mass `b_i` (m/s²), e.g. gravity.
     #[serde(default)]
     pub gravity: [f64; 2],
@@ -72,6 +82,7 @@ impl MpmParameters {
             local_damping: 0.0,
             thermal_time_step_factor: 1.0,
             node_mass_tolerance: 0.0,
+            merge_small_mass_nodes: false,
             gravity: [0.0; 2],
             velocity_conditions: Vec::new(),
             temperature_conditions: Vec::new(),

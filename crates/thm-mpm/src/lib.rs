@@ -32,7 +32,10 @@
 //! * Small-mass nodes: a node that a point's domain only grazes gets a sliver of mass but a
 //!   finite share of the point's internal force, so its velocity blows up; nodes with mass at
 //!   most `MpmParameters::node_mass_tolerance` are left out of the velocity update (velocity
-//!   0). The default 0 updates every node with mass.
+//!   0). The default 0 updates every node with mass. With
+//!   `MpmParameters::merge_small_mass_nodes` such a node is instead merged with the heavier
+//!   of its row neighbours: both take their summed force over their summed mass, so no force
+//!   is lost (along node rows only).
 //! * Local non-viscous damping of the nodal forces (`MpmParameters::local_damping`, not in the
 //!   paper): each force component is reduced by `α_l |f_i|` against the node's velocity, so it
 //!   removes energy while the forces are out of balance and leaves a steady motion alone

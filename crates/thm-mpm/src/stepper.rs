@@ -540,12 +540,62 @@ fn nodal_temperature_row(
     bad
 }
 
+/// The partner of a small-mass node `k` of a row (`0 < m_k ≤ tol`): the heavier of its two
+/// row neighbours within `cols` whose mass is above `tol` (the left one on a tie), if any.
+fn small_mass_partner(
+    sums: &[NodeSums],
+    cols: std::ops::Range<usize>,
+    k: usize,
+    tol: f64,
+) -> Option<usize> {
+    let m = |n: usize| sums[n].mass;
+    if !(m(k) > 0.0 && m(k) <= tol) {
+        return None;
+    }
+    let left = (k > cols.start).then(|| k - 1).filter(|&n| m(n) > tol);
+    let right = (k + 1 < cols.end).then_some(k + 1).filter(|&n| m(n) > tol);
+    match (left, right) {
+        (Some(l), Some(r)) => Some(if m(r) > m(l) { r } else { l }),
+        (l, r) => l.or(r),
+    }
+}
+
+/// Force and mass of node `i` merged with the small-mass nodes of its row that it partners
+/// ([`small_mass_partner`]), or of a small-mass `i` merged with its partner and the partner's
+/// other small-mass neighbour: every node of a merged group takes the group's acceleration,
+/// so the group's momentum changes by its total force. `None` when `i` is in no group.
+fn merged_sums(
+    sums: &[NodeSums],
+    cols: std::ops::Range<usize>,
+    i: usize,
+    tol: f64,
+) -> Option<([f64; 2], f64)> {
+    let head = if sums[i].mass > tol {
+        i
+    } else {
+        small_mass_partner(sums, cols.clone(), i, tol)?
+    };
+    let mut force = sums[head].force;
+    let mut mass = sums[head].mass;
+    let mut any = false;
+    for k in [head.wrapping_sub(1), head + 1] {
+        if cols.contains(&k) && small_mass_partner(sums, cols.clone(), k, tol) == Some(head) {
+            force[0] += sums[k].force[0];
+            force[1] += sums[k].force[1];
+            mass += sums[k].mass;
+            any = true;
+        }
+    }
+    any.then_some((force, mass))
+}
+
 /// Fixed inputs of the grid update.
 struct UpdateInputs<'a> {
     grid: &'a Grid,
     walls: &'a [RigidWall],
     gravity: [f64; 2],
     node_mass_tolerance: f64,
+    merge_small_mass_nodes: bool,
     local_damping: f64,
     dt: f64,
     time: f64,
@@ -584,20 +634,27 @@ fn update_row(
     }
     *dirty = active;
     let mut bad = None;
-    for i in cols {
+    for i in cols.clone() {
         let s = &sums[i];
-        let (v0, v1) = if s.mass > inp.node_mass_tolerance {
-            let inv_m = 1.0 / s.mass;
-            let mut v0 = [s.momentum[0] * inv_m, s.momentum[1] * inv_m];
+        let merged = if inp.merge_small_mass_nodes {
+            merged_sums(sums, cols.clone(), i, inp.node_mass_tolerance)
+        } else {
+            None
+        };
+        let updated = s.mass > inp.node_mass_tolerance || (merged.is_some() && s.mass > 0.0);
+        let (v0, v1) = if updated {
+            let inv_own = 1.0 / s.mass;
+            let mut v0 = [s.momentum[0] * inv_own, s.momentum[1] * inv_own];
+            // The force and mass the velocity update uses: the node's own, or those of the
+            // node merged with its small-mass neighbours (the same acceleration for both).
+            let (force, mass) = merged.unwrap_or((s.force, s.mass));
+            let inv_m = 1.0 / mass;
             let x = inp.grid.node_position(i, j);
             // A node a wall holds is not damped: the wall's reaction is its undamped force.
             let mut v1 = if inp.local_damping > 0.0 && !inp.walls.iter().any(|w| w.acts_on(x, time))
             {
                 let a = inp.local_damping;
-                let mut f = [
-                    s.force[0] + s.mass * gravity[0],
-                    s.force[1] + s.mass * gravity[1],
-                ];
+                let mut f = [force[0] + mass * gravity[0], force[1] + mass * gravity[1]];
                 for (f, v) in f.iter_mut().zip(v0) {
                     if v != 0.0 {
                         *f -= a * f.abs() * v.signum();
@@ -606,8 +663,8 @@ fn update_row(
                 [v0[0] + f[0] * inv_m * dt, v0[1] + f[1] * inv_m * dt]
             } else {
                 [
-                    v0[0] + (s.force[0] * inv_m + gravity[0]) * dt,
-                    v0[1] + (s.force[1] * inv_m + gravity[1]) * dt,
+                    v0[0] + (force[0] * inv_m + gravity[0]) * dt,
+                    v0[1] + (force[1] * inv_m + gravity[1]) * dt,
                 ]
             };
             if mask[i] & 1 != 0 {
@@ -1410,6 +1467,7 @@ impl Mpm {
             walls,
             gravity: self.config.params.gravity,
             node_mass_tolerance: self.config.params.node_mass_tolerance,
+            merge_small_mass_nodes: self.config.params.merge_small_mass_nodes,
             local_damping: self.config.params.local_damping,
             dt,
             time,
@@ -1505,6 +1563,7 @@ impl Mpm {
             walls: &self.config.params.walls,
             gravity: self.config.params.gravity,
             node_mass_tolerance: self.config.params.node_mass_tolerance,
+            merge_small_mass_nodes: self.config.params.merge_small_mass_nodes,
             local_damping: self.config.params.local_damping,
             dt,
             time,

@@ -168,6 +168,10 @@ pub struct BiaxialTest {
     /// with less mass are left out of the velocity update (the small-mass problem at the
     /// bulging sides, see the module docs).
     pub node_mass_fraction: f64,
+    /// Merge the nodes below `node_mass_fraction` with their heavier row neighbour instead of
+    /// leaving them out (`thm_mpm::MpmParameters::merge_small_mass_nodes`); default false.
+    #[serde(default)]
+    pub merge_small_mass_nodes: bool,
     /// RVE contact law, density, expansion, thickness, damping (α is replaced).
     pub rve: RveParams,
     /// The DEM time rule.
@@ -215,6 +219,7 @@ impl BiaxialTest {
             grid_damping: 0.0,
             mpm_local_damping: 0.0,
             node_mass_fraction: 0.01,
+            merge_small_mass_nodes: false,
             rve: RveParams::paper_b_table_1(),
             dem_time: DemTimeRule {
                 step_fraction: 0.2,
@@ -544,6 +549,7 @@ impl MultiscaleModel<Biaxial> {
         params.pic_fraction = t.pic_fraction;
         params.grid_damping = t.grid_damping;
         params.local_damping = t.mpm_local_damping;
+        params.merge_small_mass_nodes = t.merge_small_mass_nodes;
         let dx = h / t.points_per_cell as f64;
         params.node_mass_tolerance = t.node_mass_fraction * report.bulk_density * dx * dx;
         params.walls = vec![
